@@ -1,0 +1,53 @@
+"""fastrl: FAST arthroscopy tasks as YAML specs compiled to MuJoCo and Gymnasium environments."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import gymnasium
+
+__version__ = "0.1.0"
+
+SPECS_DIR = Path(__file__).resolve().parent.parent / "specs"
+TASK_IDS = {"ImageCentring": "imagecentring", "Periscoping": "periscoping", "TraceLines": "tracelines"}
+
+
+def spec_path(name: str) -> Path:
+    """Path of a bundled spec by name (e.g. 'tracelines')."""
+    path = SPECS_DIR / f"{name}.yaml"
+    if not path.exists():
+        raise FileNotFoundError(f"no bundled spec '{name}' in {SPECS_DIR}")
+    return path
+
+
+def make(spec, *, render_mode: str | None = None, width: int = 128, height: int = 128,
+         overrides: list[str] = (), **sections):
+    """Build a FastEnv from a spec path, bundled spec name or TaskSpec; sections override spec fields."""
+    from .env import FastEnv
+    from .spec import TaskSpec, apply_overrides, load_spec
+
+    if isinstance(spec, TaskSpec):
+        task_spec = spec
+        if overrides or sections:
+            task_spec = TaskSpec.model_validate(_merge(apply_overrides(spec.model_dump(), list(overrides)), sections))
+    else:
+        path = Path(spec)
+        if not path.exists() and not str(spec).endswith((".yaml", ".yml")):
+            path = spec_path(str(spec))
+        task_spec = load_spec(path, overrides)
+        if sections:
+            task_spec = TaskSpec.model_validate(_merge(task_spec.model_dump(), sections))
+    return FastEnv(task_spec, render_mode=render_mode, width=width, height=height)
+
+
+def _merge(base: dict, extra: dict) -> dict:
+    """Deep-merge extra into a copy of base."""
+    out = dict(base)
+    for key, value in extra.items():
+        out[key] = _merge(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) else value
+    return out
+
+
+for _id, _name in TASK_IDS.items():
+    if f"fastrl/{_id}-v0" not in gymnasium.registry:
+        gymnasium.register(f"fastrl/{_id}-v0", entry_point="fastrl:make", kwargs={"spec": _name})

@@ -1,0 +1,92 @@
+"""The scripted expert: inverse portal kinematics toward the current avatar, then servo there."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..env.fast_env import FastEnv
+from ..model.kinematics import Kinematics, solve_view
+
+RESOLVE_EVERY = 15  # steps without green at the goal before the view is solved again
+
+
+class ScriptedExpert:
+    """Drives a FastEnv through every subtask; `act()` returns an action in the env's action space."""
+
+    def __init__(self, env, pivot_weight: float | None = None):
+        self.env: FastEnv = env.unwrapped
+        self.kin = Kinematics(self.env.task)
+        periscoping = self.env.spec.task.kind == "periscoping"
+        self.pivot_weight = pivot_weight if pivot_weight is not None else (0.3 if periscoping else 0.02)
+        self.discrete = self.env.spec.actions.mode == "discrete"
+        if self.discrete:
+            self.steps = np.abs(self.env.actions.table[1::2].sum(axis=1))
+        self.goal, self.goal_for, self.waiting = None, -1, 0
+
+    def reset(self) -> None:
+        """Forget the current goal (call after env.reset)."""
+        self.goal, self.goal_for, self.waiting = None, -1, 0
+
+    def act(self, obs=None):
+        """Next action toward the current avatar's view."""
+        env = self.env
+        k = min(env.done_count, len(env.t_pos) - 1)
+        q = env.portal_coordinates()
+        if self.goal_for != k or self.waiting > RESOLVE_EVERY:
+            target = (env.t_pos[k], env.t_fwd[k], env.t_up[k])
+            self.goal, _ = solve_view(self.kin, k, q, target, self.pivot_weight)
+            self.goal_for, self.waiting = k, 0
+        err = self.goal - q
+        return self._discrete(err) if self.discrete else self._continuous(err)
+
+    def _discrete(self, err: np.ndarray) -> int:
+        """One increment on the coordinate furthest from the goal; retract first, insert last."""
+        ratio = err / self.steps
+        if ratio[2] < -0.6:
+            return 6
+        order = np.argsort(-np.abs(ratio[[0, 1, 3, 4]]))
+        k = [0, 1, 3, 4][order[0]]
+        if abs(ratio[k]) > 0.6:
+            return 1 + 2 * k + (0 if err[k] > 0 else 1)
+        if ratio[2] > 0.6:
+            return 5
+        self.waiting += 1
+        return 0
+
+    def _continuous(self, err: np.ndarray) -> np.ndarray:
+        """Accelerations that bring the commanded twist to a proportional approach of the goal."""
+        env = self.env
+        acts = env.actions
+        import mujoco
+
+        qd = np.clip(3.0 * err, -1.0, 1.0)
+        qd[2] = np.clip(3.0 * err[2], -0.05, 0.05)
+        mujoco.mj_jacBody(env.model, env.data, acts.jacp, acts.jacr, acts.body) if acts.jacp.shape[1] else None
+        if acts.jacp.shape[1] != env.model.nv:
+            acts.jacp, acts.jacr = np.zeros((3, env.model.nv)), np.zeros((3, env.model.nv))
+            mujoco.mj_jacBody(env.model, env.data, acts.jacp, acts.jacr, acts.body)
+        want = np.concatenate([acts.jacp[:, :4] @ qd[:4], acts.jacr[:, :4] @ qd[:4]])
+        c = env.spec.actions
+        acc = (want - acts.twist) / env.dt
+        a = np.concatenate([acc[:3] / c.max_accel, acc[3:] / c.max_ang_accel, [qd[4] / c.max_cable_rate]])
+        if np.abs(err).max() < 1e-3:
+            self.waiting += 1
+        return np.clip(a, -1.0, 1.0).astype(np.float32)
+
+
+def run_expert_episode(env, seed: int | None = None, max_steps: int | None = None) -> dict:
+    """Roll out the expert for one episode; return its totals."""
+    expert = ScriptedExpert(env)
+    obs, info = env.reset(seed=seed)
+    total, steps = 0.0, 0
+    limit = max_steps or math.inf
+    while steps < limit:
+        obs, r, term, trunc, info = env.step(expert.act(obs))
+        total += r
+        steps += 1
+        if term or trunc:
+            break
+    return {"return": total, "steps": steps, "subtasks": info["subtask"], "subtasks_total": info["subtasks_total"],
+            "success": info["success"], "time": info["time"]}

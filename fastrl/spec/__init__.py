@@ -1,0 +1,18 @@
+"""Task specs: pydantic models, the YAML loader with file:line errors, JSON Schema."""
+
+from .loader import SpecError, SpecIssue, apply_overrides, load_model, read_yaml
+from .models import Avatar, Cue, DomeScene, Line, Portal, Scope, Task, TaskSpec
+
+
+def load_spec(path, overrides=()) -> TaskSpec:
+    """Load and validate a task spec YAML; raises SpecError listing every problem."""
+    return load_model(path, TaskSpec, list(overrides))
+
+
+def json_schema() -> dict:
+    """JSON Schema of a task spec, for editors."""
+    return TaskSpec.model_json_schema()
+
+
+__all__ = ["Avatar", "Cue", "DomeScene", "Line", "Portal", "Scope", "SpecError", "SpecIssue", "Task",
+           "TaskSpec", "apply_overrides", "json_schema", "load_model", "load_spec", "read_yaml"]

@@ -1,0 +1,308 @@
+"""Load YAML spec files into pydantic models; report every problem as FILE:LINE: path: message."""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import os
+import re
+import types
+import typing
+from collections.abc import Mapping, Sequence
+from collections.abc import Set as AbstractSet
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ValidationError
+from yaml.nodes import MappingNode, SequenceNode
+
+
+@dataclass(frozen=True)
+class SpecIssue:
+    """One problem: where it is and what is wrong."""
+
+    file: str
+    line: int | None
+    path: str
+    message: str
+
+    def __str__(self) -> str:
+        where = self.file if self.line is None else f"{self.file}:{self.line}"
+        return f"{where}: {self.path}: {self.message}" if self.path else f"{where}: {self.message}"
+
+
+class SpecError(Exception):
+    """One or more problems in a spec file; str() is the full multi-line report."""
+
+    def __init__(self, errors: list[SpecIssue]):
+        self.errors = list(errors)
+        super().__init__("\n".join(str(e) for e in self.errors))
+
+
+@dataclass
+class LineMap:
+    """1-based source lines of node paths: the key of a mapping entry, the item of a sequence."""
+
+    lines: dict[tuple, int] = field(default_factory=dict)
+    root: int | None = None
+
+    def line_for(self, path: tuple) -> int | None:
+        """Line of the exact path, else of its nearest recorded ancestor, else of the root."""
+        path = tuple(path)
+        while path and path not in self.lines:
+            path = path[:-1]
+        return self.lines[path] if path else self.root
+
+
+# YAML 1.1 reads 1e-3 / 3e5 / 1.5e3 as strings; this extra resolver makes them floats.
+_FLOAT_EXP = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$")
+
+
+class _Loader(yaml.SafeLoader):
+    """SafeLoader that rejects duplicate keys and reads 1e-3 / 3e5 as floats."""
+
+    def __init__(self, stream):
+        super().__init__(stream)
+        self._checked: set[int] = set()
+
+    def flatten_mapping(self, node):
+        if id(node) not in self._checked:  # check before merge keys (<<) are folded in
+            self._checked.add(id(node))
+            seen: dict[Any, int] = {}
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    dup = key in seen
+                except TypeError:
+                    continue  # unhashable key: the base constructor reports it
+                if dup:
+                    msg = f"duplicate key {key!r} (first at line {seen[key]})"
+                    raise yaml.constructor.ConstructorError(None, None, msg, key_node.start_mark)
+                seen[key] = key_node.start_mark.line + 1
+        super().flatten_mapping(node)
+
+
+_Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_EXP, list("-+0123456789."))
+
+
+def _fail(file: str, line: int | None, message: str) -> SpecError:
+    return SpecError([SpecIssue(file, line, "", message)])
+
+
+def _yaml_error(file: str, err: yaml.YAMLError) -> SpecError:
+    mark, ctx_mark = getattr(err, "problem_mark", None), getattr(err, "context_mark", None)
+    if mark is None:
+        return _fail(file, None, f"invalid YAML: {err}")
+    ctx = f" ({err.context}" + (f" at line {ctx_mark.line + 1})" if ctx_mark else ")")
+    return _fail(file, mark.line + 1, (err.problem or "invalid YAML") + (ctx * bool(err.context)))
+
+
+def _record_lines(loader: _Loader, node, path: tuple, lines: dict, active: set) -> None:
+    if id(node) in active:  # recursive alias
+        return
+    active.add(id(node))
+    if isinstance(node, MappingNode):
+        for key_node, value_node in node.value:
+            key = loader.construct_object(key_node, deep=True)
+            if isinstance(key, typing.Hashable):
+                lines[path + (key,)] = key_node.start_mark.line + 1
+                _record_lines(loader, value_node, path + (key,), lines, active)
+    elif isinstance(node, SequenceNode):
+        for i, item in enumerate(node.value):
+            lines[path + (i,)] = item.start_mark.line + 1
+            _record_lines(loader, item, path + (i,), lines, active)
+    active.discard(id(node))
+
+
+def read_yaml(path) -> tuple[Any, LineMap]:
+    """Parse a YAML file safely into plain data plus a LineMap; any problem raises SpecError."""
+    file = str(path)
+    try:
+        with open(os.fspath(path), "rb") as fh:
+            raw = fh.read()
+    except OSError as e:
+        raise _fail(file, None, f"cannot read file: {e.strerror or e}") from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = raw[: e.start].count(b"\n") + 1
+        raise _fail(file, line, f"file is not valid UTF-8 (byte offset {e.start})") from None
+    loader, lines = _Loader(text), {}
+    try:
+        node = loader.get_single_node()
+        data = None if node is None else loader.construct_document(node)
+        if node is not None:
+            _record_lines(loader, node, (), lines, set())
+    except yaml.YAMLError as e:
+        raise _yaml_error(file, e) from None
+    finally:
+        loader.dispose()
+    if data is None:
+        raise _fail(file, None, "file is empty (expected a mapping of fields)")
+    if not isinstance(data, dict):
+        kind = type(data).__name__
+        raise _fail(file, node.start_mark.line + 1, f"top level must be a mapping, got {kind}")
+    return data, LineMap(lines, node.start_mark.line + 1)
+
+
+def yaml_scalar(text: str) -> Any:
+    """Parse an override value as a YAML scalar or flow value; ValueError if malformed."""
+    try:
+        value = yaml.load(text, Loader=_Loader)  # _Loader derives from SafeLoader
+    except yaml.YAMLError as e:
+        raise ValueError(f"invalid value {text!r}: {getattr(e, 'problem', None) or e}") from None
+    if value is None and text.strip() not in ("", "~", "null", "Null", "NULL"):
+        return text  # e.g. "#fff" would otherwise vanish as a comment
+    return value
+
+
+def _copy(obj: Any, active: frozenset = frozenset()) -> Any:
+    """Deep copy that also un-shares YAML aliases, so an override touches only its own path."""
+    if id(obj) in active:
+        return obj
+    if isinstance(obj, dict):
+        return {k: _copy(v, active | {id(obj)}) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_copy(v, active | {id(obj)}) for v in obj]
+    return copy.deepcopy(obj)
+
+
+def _set(data: dict, segs: list[str], value: Any) -> tuple:
+    """Set value at segs inside data (creating missing mappings); return the concrete path."""
+    node, path = data, ()
+    for depth, seg in enumerate(segs):
+        here, last = ".".join(segs[:depth]) or "the top level", depth == len(segs) - 1
+        if isinstance(node, dict):
+            num = seg not in node and seg.lstrip("-").isdigit() and int(seg) in node
+            key = int(seg) if num else seg
+            if not last and key not in node:
+                node[key] = {}
+        elif isinstance(node, list):
+            if not seg.isdigit() or int(seg) >= len(node):
+                raise ValueError(f"{seg!r} is not an index of {here!r} ({len(node)} items)")
+            key = int(seg)
+        else:
+            kind = "null" if node is None else f"a {type(node).__name__}"
+            raise ValueError(  # noqa: TRY004 - reported as a bad override, not a bug
+                f"cannot descend into {here!r}: it is {kind}, not a mapping or list"
+            )
+        path += (key,)
+        if last:
+            node[key] = value
+        node = node[key]
+    return path
+
+
+def _apply(data: dict, overrides, source: str) -> tuple[dict, list[tuple[tuple, str]]]:
+    data, applied, issues = _copy(data), [], []
+    for text in overrides:
+        name, eq, raw = text.partition("=")
+        try:
+            if not eq or not all(segs := name.strip().split(".")):
+                raise ValueError("expected dotted.path=value")
+            applied.append((_set(data, segs, yaml_scalar(raw)), text))
+        except ValueError as e:
+            issues.append(SpecIssue(source, None, "", f"bad override {text!r}: {e}"))
+    if issues:
+        raise SpecError(issues)
+    return data, applied
+
+
+def apply_overrides(data: dict, overrides: list[str], *, source: str = "--set") -> dict:
+    """Return a deep copy of data with "dotted.path=value" overrides applied."""
+    return _apply(data, overrides, source)[0]
+
+
+def _flatten(tps) -> list:
+    out = []
+    for tp in tps:
+        origin = typing.get_origin(tp)
+        if origin is typing.Annotated:
+            out += _flatten(typing.get_args(tp)[:1])
+        elif origin in (typing.Union, types.UnionType):
+            out += _flatten(typing.get_args(tp))
+        else:
+            out.append(tp)
+    return out
+
+
+def _fields(tp) -> dict[str, Any]:
+    if not (isinstance(tp, type) and issubclass(tp, BaseModel)):
+        return {}
+    return {f.alias or n: f.annotation for n, f in tp.model_fields.items()}
+
+
+def _models_at(model_cls: type[BaseModel], loc: tuple) -> list[type[BaseModel]]:
+    """Model classes a raw pydantic loc (union tags included) may point at."""
+    tps = [model_cls]
+    for seg in loc:
+        nxt, tagged = [], []
+        for tp in _flatten(tps):
+            origin, args, fields = typing.get_origin(tp), typing.get_args(tp), _fields(tp)
+            lits = [typing.get_args(a) for a in fields.values() if typing.get_origin(a) is Literal]
+            if seg in fields:
+                nxt.append(fields[seg])
+            elif fields and (seg == tp.__name__ or any(seg in lit for lit in lits)):
+                tagged.append(tp)  # seg is this union member's tag
+            elif not isinstance(origin, type):
+                continue
+            elif issubclass(origin, Mapping) and args:
+                nxt.append(args[-1])
+            elif issubclass(origin, (Sequence, AbstractSet)) and isinstance(seg, int):
+                nxt += [a for a in args if a is not Ellipsis]
+        tps = nxt or tagged or tps  # a segment nothing consumes is a marker: skip it
+    return [tp for tp in _flatten(tps) if _fields(tp)]
+
+
+def _clean_loc(data: Any, loc: tuple, keep_last: bool) -> tuple:
+    """Keep only loc segments that exist in data (drops union tags, function-after[...] markers)."""
+    path, node = (), data
+    for i, seg in enumerate(loc):
+        in_list = isinstance(node, list) and isinstance(seg, int) and 0 <= seg < len(node)
+        if in_list or (isinstance(node, dict) and seg in node):
+            node = node[seg]
+        elif not (keep_last and i == len(loc) - 1):
+            continue
+        path += (seg,)
+    return path
+
+
+def _message(err: dict, data: Any, path: tuple, model_cls: type[BaseModel]) -> str:
+    kind, loc = err["type"], err["loc"]
+    if kind == "missing" and loc:
+        return f"missing required field {loc[-1]!r}"
+    if kind == "extra_forbidden" and loc:
+        for seg in path[:-1]:
+            data = data[seg]
+        present = set(data) if isinstance(data, dict) else set()
+        known = {n for m in _models_at(model_cls, loc[:-1]) for n in _fields(m)} - present
+        close = difflib.get_close_matches(str(loc[-1]), sorted(known), n=1)
+        return f"unknown field {loc[-1]!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
+    return re.sub(r"^(Value error|Assertion failed), ", "", err["msg"])
+
+
+def load_model(
+    path, model_cls: type[BaseModel], overrides: list[str] = (), context: dict | None = None
+) -> BaseModel:
+    """Read a YAML spec, apply overrides, validate into model_cls; SpecError lists every problem."""
+    data, lines = read_yaml(path)
+    data, applied = _apply(data, overrides, "--set")
+    try:
+        return model_cls.model_validate(data, context=context)
+    except ValidationError as exc:
+        issues = []
+        for err in exc.errors():
+            where = _clean_loc(data, tuple(err["loc"]), keep_last=err["type"] == "missing")
+            dotted, message = ".".join(map(str, where)), _message(err, data, where, model_cls)
+            src = [text for p, text in applied if where[: len(p)] == p]  # overridden path?
+            if src:
+                issue = SpecIssue("--set", None, dotted, f"{message} (from --set {src[-1]!r})")
+            else:
+                issue = SpecIssue(str(path), lines.line_for(where), dotted, message)
+            if issue not in issues:
+                issues.append(issue)
+        issues.sort(key=lambda i: (i.line is None, i.line or 0))
+        raise SpecError(issues) from None

@@ -1,0 +1,320 @@
+"""The task-spec language: frozen pydantic models with every check a spec can fail."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any, Literal, Union
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic_core import InitErrorDetails, PydanticCustomError
+
+from ..terms import OBSERVATION_TERMS, REWARD_FEATURES
+from . import geometry as geo
+
+Pos = Annotated[float, Field(gt=0)]
+NonNeg = Annotated[float, Field(ge=0)]
+
+
+class Strict(BaseModel):
+    """Base: frozen, unknown keys are errors."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class Portal(Strict):
+    """A hole in the dome shell through which the scope pivots."""
+
+    name: str
+    azimuth: float = Field(description="degrees about +z from +x")
+    elevation: float = Field(ge=0, le=85, description="degrees above the plate")
+    aim: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="point the shaft aims at when pitch = yaw = 0 (m)")
+    radius: Pos = Field(0.012, description="radius of the hole (m)")
+
+
+class DomeScene(Strict):
+    """The FAST dome: a hemispherical shell over a base plate."""
+
+    kind: Literal["fast_dome"] = "fast_dome"
+    radius: float = Field(0.12, ge=0.05, le=0.5, description="inner radius of the shell (m)")
+    thickness: float = Field(0.004, gt=0, le=0.02, description="shell thickness (m)")
+    rings: int = Field(10, ge=3, le=40, description="shell tiles from rim to crown")
+    sectors: int = Field(28, ge=6, le=96, description="shell tiles around")
+    portals: list[Portal] = Field(min_length=1)
+
+    @field_validator("portals")
+    @classmethod
+    def _unique(cls, v):
+        names = [p.name for p in v]
+        if len(set(names)) != len(names):
+            raise ValueError(f"portal names must be unique, got {names}")
+        return v
+
+
+Scene = Annotated[Union[DomeScene], Field(discriminator="kind")]
+
+
+class StartPose(Strict):
+    """Initial portal coordinates of the scope."""
+
+    pitch_deg: float = 0.0
+    yaw_deg: float = 0.0
+    insertion: float = 0.03
+    roll_deg: float = 0.0
+    cable_deg: float = 0.0
+    noise: tuple[float, float, float, float, float] = Field(
+        (0.0, 0.0, 0.0, 0.0, 0.0), description="uniform +- noise per coordinate at reset (deg, deg, m, deg, deg)")
+
+
+class Scope(Strict):
+    """The arthroscope: shaft through a portal, camera at the tip, angled optics."""
+
+    portal: str
+    optics_deg: Literal[0, 30, 70] = 30
+    fov_deg: float = Field(80.0, ge=20, le=140)
+    shaft_length: float = Field(0.16, gt=0.05, le=0.5)
+    diameter: float = Field(0.004, gt=0.001, le=0.02)
+    insertion: tuple[NonNeg, Pos] = Field((0.01, 0.15), description="tip depth range past the portal (m)")
+    pivot_limit_deg: float = Field(60.0, gt=0, le=85)
+    damping: NonNeg = Field(0.05, description="entry-point damping on the portal joints")
+    frictionloss: NonNeg = Field(0.002, description="entry-point dry friction on the portal joints")
+    start: StartPose = StartPose()
+
+    @model_validator(mode="after")
+    def _ranges(self):
+        lo, hi = self.insertion
+        if lo >= hi:
+            raise ValueError(f"insertion range must be increasing, got {list(self.insertion)}")
+        if hi >= self.shaft_length:
+            raise ValueError(f"insertion {hi} m must be shorter than the shaft ({self.shaft_length} m)")
+        if not lo <= self.start.insertion <= hi:
+            _fail("start.insertion", f"start insertion {self.start.insertion} m is outside {list(self.insertion)}")
+        return self
+
+
+class Cue(Strict):
+    """Tolerances under which an avatar turns green, and how long they must hold."""
+
+    centring_deg: Pos = 8.0
+    horizon_deg: Pos = 15.0
+    distance: tuple[Pos, Pos] = (0.02, 0.05)
+    dwell: NonNeg = 0.5
+
+    @field_validator("distance")
+    @classmethod
+    def _increasing(cls, v):
+        if v[0] >= v[1]:
+            raise ValueError(f"distance range must be increasing, got {list(v)}")
+        return v
+
+
+class Avatar(Strict):
+    """A target on the plate (at = [x, y] m) or on the dome (at = [azimuth, elevation] deg)."""
+
+    surface: Literal["plate", "dome"] = "plate"
+    at: tuple[float, float]
+    heading_deg: float = Field(90.0, description="direction of the avatar's up, deg (plate: from +x; dome: from the zenith)")
+    cue: Cue | None = None
+
+
+class Line(Strict):
+    """TraceLines' line on the plate; avatars are placed along it every `spacing` metres."""
+
+    points: list[tuple[float, float]] = Field(min_length=2)
+    spline: bool = False
+    spacing: float = Field(0.01, gt=0.002, le=0.1)
+    width: float = Field(0.0015, gt=0, le=0.01)
+    heading_deg: float = 90.0
+
+
+class Task(Strict):
+    """Which FAST task, its avatars or line, and the default cue."""
+
+    kind: Literal["image_centring", "periscoping", "trace_lines"]
+    avatars: list[Avatar] = []
+    line: Line | None = None
+    cue: Cue = Cue()
+    jitter: tuple[NonNeg, NonNeg] = Field((0.0, 0.0), description="random avatar offset at reset: metres on the plate, degrees on the dome")
+
+    @model_validator(mode="after")
+    def _targets(self):
+        if self.kind == "trace_lines" and self.line is None:
+            raise ValueError("trace_lines needs a 'line'")
+        if self.kind != "trace_lines" and not self.avatars:
+            raise ValueError(f"{self.kind} needs at least one avatar")
+        return self
+
+
+class Episode(Strict):
+    """Control rate, physics substeps and time limit."""
+
+    control_hz: float = Field(20.0, ge=1, le=1000)
+    substeps: int = Field(25, ge=1, le=200)
+    time_limit: Pos = 60.0
+
+
+class Actions(Strict):
+    """Action space and its scales."""
+
+    mode: Literal["discrete", "continuous"] = "discrete"
+    pivot_step_deg: Pos = 1.5
+    insertion_step: Pos = 0.002
+    roll_step_deg: Pos = 4.0
+    cable_step_deg: Pos = 4.0
+    max_accel: Pos = Field(1.0, description="continuous: tip linear acceleration at |a| = 1 (m/s^2)")
+    max_ang_accel: Pos = Field(30.0, description="continuous: tip angular acceleration at |a| = 1 (rad/s^2)")
+    max_cable_rate: Pos = Field(2.0, description="continuous: light-cable rate at |a| = 1 (rad/s)")
+    max_speed: Pos = Field(0.1, description="continuous: cap on the commanded tip speed (m/s)")
+    max_ang_speed: Pos = Field(2.0, description="continuous: cap on the commanded angular speed (rad/s)")
+
+
+class Observation(Strict):
+    """The paper's state, with options; `extra` adds registered terms by name."""
+
+    velocities: bool = True
+    goal: bool = True
+    egocentric: bool = False
+    extra: list[str] = []
+    stack: int = Field(1, ge=1, le=16)
+
+    @field_validator("extra")
+    @classmethod
+    def _known(cls, v):
+        for name in v:
+            if name not in OBSERVATION_TERMS:
+                raise ValueError(f"unknown observation term '{name}' (known: {', '.join(OBSERVATION_TERMS)})")
+        return v
+
+    def terms(self) -> list[str]:
+        """Observation term names in order."""
+        names = ["tip_pos", "tip_quat"]
+        names += ["tip_vel", "tip_quat_rate"] if self.velocities else []
+        names += ["target_pos", "target_quat"] if self.goal else []
+        names += ["alignment"]
+        if self.egocentric:
+            names += ["target_in_camera", "horizon_error", "distance_error", "dwell", "portal", "subtask_fraction"]
+        return names + [n for n in self.extra if n not in names]
+
+
+class Feature(Strict):
+    """One reward feature's weight and parameters."""
+
+    weight: float
+    params: dict[str, Any] = {}
+
+
+class Reward(Strict):
+    """r = w . phi(s) over registered features."""
+
+    gamma: float = Field(0.99, gt=0, le=1, description="discount used by the shaping feature")
+    features: dict[str, Feature] = Field(min_length=1)
+
+    @model_validator(mode="after")
+    def _known(self):
+        errors = []
+        for name, f in self.features.items():
+            if name not in REWARD_FEATURES:
+                errors.append((("features", name), f"unknown reward feature '{name}' (known: {', '.join(REWARD_FEATURES)})", name))
+                continue
+            for key, problem in REWARD_FEATURES[name].check_params(f.params):
+                errors.append((("features", name, "params", key), problem, f.params[key]))
+        _raise(errors)
+        return self
+
+
+class Train(Strict):
+    """Training settings (filled in by the runner)."""
+
+    algo: Literal["PPO", "SAC"] = "PPO"
+    timesteps: int = Field(500_000, ge=1)
+    n_envs: int = Field(8, ge=1, le=256)
+    seed: int = 0
+    hyperparams: dict[str, Any] = {}
+
+
+class Evaluate(Strict):
+    """Evaluation settings (filled in by the runner)."""
+
+    episodes: int = Field(20, ge=1)
+    seed: int = 10_000
+
+
+class TaskSpec(Strict):
+    """A whole task: scene, scope, task, episode, actions, observation, reward, train, evaluate."""
+
+    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$")
+    description: str = ""
+    scene: Scene
+    scope: Scope
+    task: Task
+    episode: Episode = Episode()
+    actions: Actions = Actions()
+    observation: Observation = Observation()
+    reward: Reward
+    train: Train = Train()
+    evaluate: Evaluate = Evaluate()
+
+    @model_validator(mode="after")
+    def _reachable(self):
+        names = [p.name for p in self.scene.portals]
+        if self.scope.portal not in names:
+            _fail("scope.portal", f"no portal named '{self.scope.portal}' (portals: {', '.join(names)})")
+        errors = []
+        for i, av in enumerate(self.task.avatars):
+            problem = self.avatar_problem(av)
+            if problem:
+                errors.append((("task", "avatars", i, "at"), problem, list(av.at)))
+        if self.task.line is not None:
+            for i, xy in enumerate(self.task.line.points):
+                problem = self.avatar_problem(Avatar(surface="plate", at=xy))
+                if problem:
+                    errors.append((("task", "line", "points", i), problem, list(xy)))
+        _raise(errors)
+        return self
+
+    def portal(self) -> Portal:
+        """The portal the scope goes through."""
+        return next(p for p in self.scene.portals if p.name == self.scope.portal)
+
+    def cue_for(self, avatar: Avatar) -> Cue:
+        """The avatar's own cue, else the task's."""
+        return avatar.cue or self.task.cue
+
+    def avatar_problem(self, av: Avatar) -> str | None:
+        """Why an avatar is outside the dome or out of the scope's reach, or None."""
+        r = self.scene.radius
+        if av.surface == "plate" and math.hypot(*av.at) > r - 0.01:
+            return f"target [{av.at[0]}, {av.at[1]}] is outside the dome: it is {math.hypot(*av.at):.3f} m from the centre, the plate inside the shell ends at {r - 0.01:.3f} m"
+        if av.surface == "dome" and not 5.0 <= av.at[1] <= 88.0:
+            return f"target elevation {av.at[1]} deg is outside the dome's inner surface (5 to 88 deg)"
+        pos, fwd, _ = geo.avatar_pose(r, av.surface, av.at, av.heading_deg)
+        p = self.portal()
+        point, rot = geo.portal_frame(r, p.azimuth, p.elevation, p.aim)
+        d = pos - point
+        dist = float(np.linalg.norm(d))
+        off = math.degrees(math.acos(np.clip(d @ rot[:, 2] / dist, -1, 1)))
+        reach = self.scope.pivot_limit_deg + self.scope.optics_deg
+        if off > reach:
+            return (f"portal '{p.name}' cannot reach this target: it lies {off:.0f} deg off the portal axis, "
+                    f"the scope reaches {reach:.0f} deg (pivot limit + optics angle)")
+        cue = self.cue_for(av)
+        far = self.scope.insertion[1] + 0.5 * (cue.distance[0] + cue.distance[1])
+        if dist > far:
+            return (f"portal '{p.name}' cannot reach this target: it is {dist:.3f} m away, the scope holds it "
+                    f"at mid viewing distance only up to {far:.3f} m (insertion + viewing distance)")
+        if dist < cue.distance[0]:
+            return f"target is {dist:.3f} m from portal '{p.name}', closer than the cue's minimum distance"
+        return None
+
+
+def _raise(errors: list[tuple[tuple, str, Any]]) -> None:
+    """Raise one ValidationError carrying every (loc, message, input) with its own location."""
+    if errors:
+        raise ValidationError.from_exception_data("TaskSpec", [
+            InitErrorDetails(type=PydanticCustomError("spec", msg), loc=loc, input=value) for loc, msg, value in errors])
+
+
+def _fail(dotted: str, msg: str) -> None:
+    """Raise a ValidationError at a dotted location."""
+    loc = tuple(int(k) if k.isdigit() else k for k in dotted.split("."))
+    _raise([(loc, msg, None)])

@@ -1,0 +1,53 @@
+"""The task state that reward features and observation terms read: plain floats and tuples, no MuJoCo."""
+
+from __future__ import annotations
+
+
+
+class TaskState:
+    """Everything the terms may read at one control step; the env fills it in place."""
+
+    __slots__ = (
+        "time", "dt", "gamma",
+        "tip_pos", "tip_quat", "tip_vel", "tip_quat_rate", "tip_speed", "tip_accel",
+        "cam_pos", "cam_fwd", "cam_up", "cam_right", "fov",
+        "portal", "portal_vel", "portal_lo", "portal_hi",
+        "target_pos", "target_quat", "target_fwd", "target_up",
+        "centring", "horizon", "distance", "dist_lo", "dist_hi",
+        "tol_centring", "tol_horizon", "dwell_time",
+        "green", "dwell", "prev_dwell", "completed", "subtask", "subtasks_total",
+        "contacts", "line_deviation", "ray_fraction",
+        "potential", "prev_potential", "goals",
+    )
+
+    def __init__(self):
+        z3 = (0.0, 0.0, 0.0)
+        self.time, self.dt, self.gamma = 0.0, 0.05, 0.99
+        self.tip_pos = self.tip_vel = self.tip_accel = self.cam_pos = z3
+        self.tip_quat, self.tip_quat_rate = (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0)
+        self.tip_speed = 0.0
+        self.cam_fwd, self.cam_up, self.cam_right = (0.0, 0.0, -1.0), (0.0, 1.0, 0.0), (1.0, 0.0, 0.0)
+        self.fov = 1.0
+        self.portal = self.portal_vel = (0.0,) * 5
+        self.portal_lo, self.portal_hi = (-1.0,) * 5, (1.0,) * 5
+        self.target_pos, self.target_quat = z3, (1.0, 0.0, 0.0, 0.0)
+        self.target_fwd, self.target_up = (0.0, 0.0, 1.0), (0.0, 1.0, 0.0)
+        self.centring = self.horizon = self.distance = 0.0
+        self.dist_lo, self.dist_hi = 0.02, 0.05
+        self.tol_centring, self.tol_horizon, self.dwell_time = 0.14, 0.26, 0.5
+        self.green = self.completed = False
+        self.dwell = self.prev_dwell = 0.0
+        self.subtask, self.subtasks_total = 0, 1
+        self.contacts = 0
+        self.line_deviation = self.ray_fraction = 0.0
+        self.potential = self.prev_potential = 0.0
+        self.goals = z3
+
+    @property
+    def distance_error(self) -> float:
+        """Signed distance outside the allowed range (0 inside, <0 too close, >0 too far)."""
+        if self.distance < self.dist_lo:
+            return self.distance - self.dist_lo
+        if self.distance > self.dist_hi:
+            return self.distance - self.dist_hi
+        return 0.0
