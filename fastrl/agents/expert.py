@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 
 from ..env.fast_env import FastEnv
@@ -18,11 +19,13 @@ class ScriptedExpert:
     def __init__(self, env, pivot_weight: float | None = None):
         self.env: FastEnv = env.unwrapped
         self.kin = Kinematics(self.env.task)
-        periscoping = self.env.spec.task.kind == "periscoping"
+        periscoping = self.env.task_spec.task.kind == "periscoping"
         self.pivot_weight = pivot_weight if pivot_weight is not None else (0.3 if periscoping else 0.02)
-        self.discrete = self.env.spec.actions.mode == "discrete"
+        self.discrete = self.env.task_spec.actions.mode == "discrete"
         if self.discrete:
             self.steps = np.abs(self.env.actions.table[1::2].sum(axis=1))
+        nv = self.env.model.nv
+        self.jacp, self.jacr = np.zeros((3, nv)), np.zeros((3, nv))
         self.goal, self.goal_for, self.waiting = None, -1, 0
 
     def reset(self) -> None:
@@ -56,20 +59,13 @@ class ScriptedExpert:
         return 0
 
     def _continuous(self, err: np.ndarray) -> np.ndarray:
-        """Accelerations that bring the commanded twist to a proportional approach of the goal."""
-        env = self.env
-        acts = env.actions
-        import mujoco
-
+        """Accelerations that bring the commanded tip twist to a proportional approach of the goal."""
+        env, c = self.env, self.env.task_spec.actions
         qd = np.clip(3.0 * err, -1.0, 1.0)
         qd[2] = np.clip(3.0 * err[2], -0.05, 0.05)
-        mujoco.mj_jacBody(env.model, env.data, acts.jacp, acts.jacr, acts.body) if acts.jacp.shape[1] else None
-        if acts.jacp.shape[1] != env.model.nv:
-            acts.jacp, acts.jacr = np.zeros((3, env.model.nv)), np.zeros((3, env.model.nv))
-            mujoco.mj_jacBody(env.model, env.data, acts.jacp, acts.jacr, acts.body)
-        want = np.concatenate([acts.jacp[:, :4] @ qd[:4], acts.jacr[:, :4] @ qd[:4]])
-        c = env.spec.actions
-        acc = (want - acts.twist) / env.dt
+        mujoco.mj_jacBody(env.model, env.data, self.jacp, self.jacr, env.actions.body)
+        want = np.concatenate([self.jacp[:, :4] @ qd[:4], self.jacr[:, :4] @ qd[:4]])
+        acc = (want - env.actions.twist) / env.dt
         a = np.concatenate([acc[:3] / c.max_accel, acc[3:] / c.max_ang_accel, [qd[4] / c.max_cable_rate]])
         if np.abs(err).max() < 1e-3:
             self.waiting += 1

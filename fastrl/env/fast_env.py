@@ -26,7 +26,7 @@ class FastEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(self, spec: TaskSpec, render_mode: str | None = None, width: int = 128, height: int = 128):
-        self.spec = spec
+        self.task_spec = spec
         self.task: CompiledTask = compile_task(spec)
         self.model, self.data = self.task.model, mujoco.MjData(self.task.model)
         self.render_mode, self.width, self.height = render_mode, width, height
@@ -53,6 +53,7 @@ class FastEnv(gym.Env):
         self.state.fov = math.radians(spec.scope.fov_deg)
         self.state.portal_lo, self.state.portal_hi = ranges[:, 0].copy(), ranges[:, 1].copy()
         self.state.subtasks_total = len(self.task.targets)
+        self.lens, self.cable = self.task.lens_qadr, int(self.task.qadr[4])
         self._renderer = None
         self._frames = np.zeros((self.stack, self.obs_dim), np.float32)
         self._reset_targets()
@@ -87,6 +88,7 @@ class FastEnv(gym.Env):
         mujoco.mj_step2(m, d)
         if self.substeps > 1:
             mujoco.mj_step(m, d, nstep=self.substeps - 1)
+        d.qpos[self.lens] = -d.qpos[self.cable]  # remove the soft coupling's drift: replay is then exact
         mujoco.mj_step1(m, d)
         if not np.isfinite(d.qpos[0]):
             raise RuntimeError("physics diverged (non-finite state)")
@@ -214,7 +216,7 @@ class FastEnv(gym.Env):
 
     def _start_pose(self) -> np.ndarray:
         """The spec's start pose plus its uniform noise."""
-        st = self.spec.scope.start
+        st = self.task_spec.scope.start
         q = np.array([math.radians(st.pitch_deg), math.radians(st.yaw_deg), st.insertion,
                       math.radians(st.roll_deg), math.radians(st.cable_deg)])
         noise = np.array(st.noise) * np.array([math.pi / 180, math.pi / 180, 1.0, math.pi / 180, math.pi / 180])
@@ -224,10 +226,10 @@ class FastEnv(gym.Env):
         """Target poses for this episode: the spec's, moved by the task's jitter."""
         t = self.task.targets
         self.t_pos, self.t_fwd, self.t_up, self.t_quat = t.pos.copy(), t.fwd.copy(), t.up.copy(), t.quat.copy()
-        jm, jd = self.spec.task.jitter
+        jm, jd = self.task_spec.task.jitter
         if not jitter or (jm == 0 and jd == 0):
             return
-        r = self.spec.scene.radius
+        r = self.task_spec.scene.radius
         for i in range(len(t)):
             noise = self.np_random.uniform(-1.0, 1.0, 2)
             surface = "plate" if t.on_plate[i] else "dome"

@@ -1,0 +1,205 @@
+"""The FAST environments: API checks, determinism, fulcrum, cues, reward, replay, rendering."""
+
+import gymnasium
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+import fastrl
+from fastrl.agents.expert import ScriptedExpert
+from fastrl.model.kinematics import Kinematics, solve_view
+
+from .conftest import spec_file
+
+IDS = {"imagecentring": "fastrl/ImageCentring-v0", "periscoping": "fastrl/Periscoping-v0",
+       "tracelines": "fastrl/TraceLines-v0"}
+
+
+@pytest.mark.parametrize("mode", ["discrete", "continuous"])
+def test_gymnasium_and_sb3_checkers_pass(task_name, mode):
+    env = gymnasium.make(IDS[task_name], actions={"mode": mode})
+    gym_check_env(env.unwrapped, skip_render_check=True)
+    sb3_check_env(env.unwrapped, warn=False)
+    assert env.action_space.shape == (() if mode == "discrete" else (7,))
+    if mode == "discrete":
+        assert env.action_space.n == 11
+
+
+def rollout(env, actions, seed):
+    """Observations of a fixed action sequence."""
+    obs, _ = env.reset(seed=seed)
+    out = [obs]
+    for a in actions:
+        obs, *_ = env.step(a)
+        out.append(obs)
+    return np.array(out)
+
+
+def test_same_seed_and_actions_give_identical_observations(task_name):
+    actions = np.random.default_rng(1).integers(0, 11, 150)
+    a = rollout(fastrl.make(spec_file(task_name)), actions, seed=7)
+    b = rollout(fastrl.make(spec_file(task_name)), actions, seed=7)
+    c = rollout(fastrl.make(spec_file(task_name)), actions, seed=8)
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, c)
+
+
+@pytest.mark.parametrize("mode", ["discrete", "continuous"])
+def test_the_shaft_always_passes_through_the_portal_point(mode):
+    env = fastrl.make(spec_file("imagecentring"), actions={"mode": mode})
+    u = env.unwrapped
+    shaft = u.model.body("scope_shaft").id
+    point = u.task.portal_point
+    rng = np.random.default_rng(0)
+    env.reset(seed=0)
+    worst, contacts = 0.0, 0
+    for i in range(600):
+        a = rng.integers(0, 11) if mode == "discrete" else rng.uniform(-1, 1, 7)
+        _, _, term, trunc, info = env.step(a)
+        tip, axis = u.data.xpos[shaft], u.data.xmat[shaft].reshape(3, 3)[:, 2]
+        worst = max(worst, np.linalg.norm(np.cross(point - tip, axis)))
+        assert np.allclose(u.data.cam_xpos[u.task.camera], tip, atol=1e-9)
+        contacts += info["contacts"] > 0
+        if term or trunc:
+            env.reset()
+    assert worst < 1e-6
+
+
+def test_the_tip_is_stopped_by_the_plate():
+    env = fastrl.make(spec_file("imagecentring"), scope={"start": {"noise": [0, 0, 0, 0, 0]}})
+    u = env.unwrapped
+    env.reset(seed=0)
+    env.unwrapped.set_portal_coordinates([0.45, 0.0, 0.06, 0.0, 0.0])  # shaft steeply down toward the plate
+    for _ in range(60):
+        _, _, _, _, info = env.step(5)  # keep inserting
+    assert info["contacts"] > 0
+    assert u.data.cam_xpos[u.task.camera][2] > -0.001  # did not pass through
+
+
+def goal_pose(env, k=0):
+    """Portal coordinates that satisfy subtask k's cues."""
+    u = env.unwrapped
+    q, _ = solve_view(Kinematics(u.task), k, u.portal_coordinates())
+    return q
+
+
+def test_cues_hold_at_the_solved_view_and_the_dwell_completes_on_time():
+    env = fastrl.make(spec_file("imagecentring"))
+    env.reset(seed=0)
+    q = goal_pose(env)
+    u = env.unwrapped
+    u.set_portal_coordinates(q)
+    steps_needed = int(np.ceil(u.task_spec.task.cue.dwell * u.task_spec.episode.control_hz - 1e-9))
+    for i in range(1, steps_needed):
+        _, _, _, _, info = u.replay_step(q)
+        assert all(info["cue"][k] for k in ("centring", "horizon", "distance", "green"))
+        assert info["subtask"] == 0 and info["features"]["completed"] == 0.0
+        assert info["cue"]["dwell"] == pytest.approx(i / steps_needed)
+    _, _, _, _, info = u.replay_step(q)
+    assert info["subtask"] == 1 and info["features"]["completed"] == 1.0
+    assert not info["cue"]["green"]  # the cue now describes the next avatar
+
+
+def test_leaving_tolerance_resets_the_dwell():
+    env = fastrl.make(spec_file("imagecentring"))
+    env.reset(seed=0)
+    u = env.unwrapped
+    q = goal_pose(env)
+    u.replay_step(q)
+    _, _, _, _, info = u.replay_step(q)
+    assert info["cue"]["dwell"] > 0
+    away = q + np.array([0.4, 0, 0, 0, 0])
+    _, _, _, _, info = u.replay_step(away)
+    assert not info["cue"]["green"] and info["cue"]["dwell"] == 0.0
+
+
+def test_reward_is_the_weighted_sum_of_features_and_weights_change_live():
+    env = fastrl.make(spec_file("tracelines"))
+    env.reset(seed=0)
+    u = env.unwrapped
+    _, r, _, _, info = env.step(1)
+    w = u.reward_weights()
+    assert r == pytest.approx(sum(w[k] * v for k, v in info["features"].items()))
+    u.set_reward_weights({"time": -5.0})
+    _, r2, _, _, info2 = env.step(0)
+    assert r2 == pytest.approx(sum(u.reward_weights()[k] * v for k, v in info2["features"].items()))
+    assert u.reward_weights()["time"] == -5.0
+    with pytest.raises(ValueError, match="unknown reward features"):
+        u.set_reward_weights({"nope": 1.0})
+
+
+def test_info_has_the_documented_keys(task_name):
+    env = fastrl.make(spec_file(task_name))
+    _, info = env.reset(seed=0)
+    _, _, _, _, info = env.step(0)
+    assert {"features", "subtask", "subtasks_total", "cue", "success"} <= set(info)
+    assert set(info["features"]) == set(env.unwrapped.task_spec.reward.features)
+    assert {"centring", "horizon", "distance", "green", "dwell"} <= set(info["cue"])
+
+
+def test_bad_actions_raise_and_out_of_range_continuous_actions_are_clipped():
+    env = fastrl.make(spec_file("imagecentring"))
+    env.reset(seed=0)
+    for bad in (float("nan"), 11, -1, 2.5):
+        with pytest.raises(ValueError):
+            env.step(bad)
+    envs = [fastrl.make(spec_file("imagecentring"), actions={"mode": "continuous"}) for _ in range(2)]
+    for e in envs:
+        e.reset(seed=3)
+    with pytest.raises(ValueError, match="non-finite"):
+        envs[0].step(np.array([np.inf, 0, 0, 0, 0, 0, 0]))
+    a, b = envs[0].step(np.full(7, 5.0))[0], envs[1].step(np.ones(7))[0]
+    assert np.array_equal(a, b)
+
+
+def test_truncates_at_the_time_limit():
+    env = fastrl.make(spec_file("periscoping"), episode={"time_limit": 1.0})
+    env.reset(seed=0)
+    for i in range(20):
+        _, _, term, trunc, _ = env.step(0)
+    assert trunc and not term
+
+
+def test_replaying_portal_coordinates_recomputes_identical_observations_and_features(task_name):
+    env = fastrl.make(spec_file(task_name))
+    expert = ScriptedExpert(env)
+    obs, _ = env.reset(seed=4)
+    coords, observations, feats = [env.unwrapped.portal_coordinates()], [obs], []
+    for _ in range(120):
+        obs, _, term, trunc, info = env.step(expert.act(obs))
+        coords.append(env.unwrapped.portal_coordinates())
+        observations.append(obs)
+        feats.append(info["features"])
+        if term or trunc:
+            break
+    replay = fastrl.make(spec_file(task_name)).unwrapped
+    obs, _ = replay.reset(seed=4, options={"portal": coords[0]})
+    assert np.array_equal(obs, observations[0])
+    for q, want_obs, want_feats in zip(coords[1:], observations[1:], feats):
+        obs, _, _, _, info = replay.replay_step(q)
+        np.testing.assert_allclose(obs, want_obs, atol=1e-9)
+        assert info["features"] == pytest.approx(want_feats, abs=1e-9)
+
+
+def test_render_returns_an_endoscope_image_and_an_outside_view():
+    env = fastrl.make(spec_file("imagecentring"), render_mode="rgb_array", width=64, height=48)
+    env.reset(seed=0)
+    img = env.render()
+    assert img.shape == (48, 64, 3) and img.dtype == np.uint8 and img.std() > 1.0
+    views = env.unwrapped.render_views()
+    assert views["outside"].shape == (48, 64, 3) and not np.array_equal(views["outside"], views["endoscope"])
+    env.close()
+
+
+def test_portal_coordinates_round_trip_and_are_clipped_to_their_ranges():
+    env = fastrl.make(spec_file("imagecentring"))
+    env.reset(seed=0)
+    u = env.unwrapped
+    q = np.array([0.2, -0.1, 0.07, 0.5, -1.0])
+    u.set_portal_coordinates(q)
+    assert np.allclose(u.portal_coordinates(), q)
+    u.set_portal_coordinates([5.0, 0, 1.0, 0, 0])
+    assert np.allclose(u.portal_coordinates()[[0, 2]], u.task.ranges[[0, 2], 1])
+    with pytest.raises(ValueError):
+        u.set_portal_coordinates([0, 0, np.nan, 0, 0])
