@@ -18,13 +18,13 @@ if TYPE_CHECKING:
 
 app = typer.Typer(
     name="fastrl",
-    help="FAST arthroscopy tasks: YAML specs compiled to MuJoCo, trained and scored as RL environments.",
+    help="FAST arthroscopy tasks: YAML specs compiled to MuJoCo, trained and scored as RL.",
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     add_completion=False,
 )
 
-# soft_wrap: never re-wrap lines (FILE:LINE messages stay one line); emoji off (":100:" is a line number).
+# soft_wrap: never re-wrap (a FILE:LINE message stays one line); emoji off (":100:" is a line).
 # Rich drops colour by itself when the stream is not a terminal (CI, pipes, CliRunner).
 out = Console(soft_wrap=True, emoji=False, highlight=False)
 err = Console(stderr=True, soft_wrap=True, emoji=False, highlight=False)
@@ -32,8 +32,12 @@ err = Console(stderr=True, soft_wrap=True, emoji=False, highlight=False)
 SpecArg = Annotated[Path, typer.Argument(metavar="SPEC", help="task spec YAML", show_default=False)]
 SetOpt = Annotated[
     list[str] | None,
-    typer.Option("--set", metavar="KEY=VALUE", show_default=False,
-                 help="override a spec field, e.g. --set task.cue.dwell=1.0 (repeatable)"),
+    typer.Option(
+        "--set",
+        metavar="KEY=VALUE",
+        show_default=False,
+        help="override a spec field, e.g. --set task.cue.dwell=1.0 (repeatable)",
+    ),
 ]
 
 
@@ -41,7 +45,7 @@ SetOpt = Annotated[
 
 
 def load(path: Path, overrides: list[str] | None = None) -> CompiledTask:
-    """Validate and compile a spec; every problem, MuJoCo's compile errors included, raises SpecError."""
+    """Validate and compile a spec; every problem (MuJoCo compile errors too) raises SpecError."""
     from .model import compile_task  # imports mujoco: only for commands that need it
 
     spec = load_spec(path, overrides or ())
@@ -49,7 +53,9 @@ def load(path: Path, overrides: list[str] | None = None) -> CompiledTask:
         return compile_task(spec)
     except ValueError as e:  # mujoco reports compile errors as ValueError
         detail = " ".join(str(e).split())
-        raise SpecError([SpecIssue(str(path), None, "", f"MuJoCo cannot compile the model: {detail}")]) from None
+        raise SpecError(
+            [SpecIssue(str(path), None, "", f"MuJoCo cannot compile the model: {detail}")]
+        ) from None
 
 
 def report(error: SpecError) -> None:
@@ -87,16 +93,21 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def main(
-    version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
-                                          help="print the version and exit")] = False,
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_version, is_eager=True, help="print the version and exit"
+        ),
+    ] = False,
 ) -> None:
-    """FAST arthroscopy tasks: YAML specs compiled to MuJoCo, trained and scored as RL environments."""
+    """FAST arthroscopy tasks: YAML specs compiled to MuJoCo, trained and scored as RL."""
 
 
 @app.command()
 def check(
-    specs: Annotated[list[Path], typer.Argument(metavar="SPEC", help="task spec YAML files",
-                                                   show_default=False)],
+    specs: Annotated[
+        list[Path], typer.Argument(metavar="SPEC", help="task spec YAML files", show_default=False)
+    ],
     set_: SetOpt = None,
 ) -> None:
     """Validate and compile task specs; print FILE:LINE errors and exit 2 if any is bad."""
@@ -117,8 +128,9 @@ def check(
 
 @app.command()
 def schema(
-    output: Annotated[Path | None, typer.Option("-o", "--output", help="write to this file",
-                                                   show_default=False)] = None,
+    output: Annotated[
+        Path | None, typer.Option("-o", "--output", help="write to this file", show_default=False)
+    ] = None,
 ) -> None:
     """Print the JSON Schema of task specs (for editors), or write it to a file."""
     text = json.dumps(json_schema(), indent=2) + "\n"
@@ -132,16 +144,19 @@ def schema(
 @app.command(name="compile")
 def compile_(
     spec: SpecArg,
-    output: Annotated[Path, typer.Option("-o", "--output", help="MJCF file to write",
-                                         show_default=False)],
+    output: Annotated[
+        Path, typer.Option("-o", "--output", help="MJCF file to write", show_default=False)
+    ],
     set_: SetOpt = None,
 ) -> None:
     """Compile a task spec and write the MuJoCo model (MJCF XML)."""
     task = load_or_exit(spec, set_)
     write_text(output, task.xml)
     m = task.model
-    out.print(f"wrote {escape(str(output))}  (nbody {m.nbody}, njnt {m.njnt}, ngeom {m.ngeom}, "
-              f"nu {m.nu}, timestep {m.opt.timestep:g} s)")
+    out.print(
+        f"wrote {escape(str(output))}  (nbody {m.nbody}, njnt {m.njnt}, ngeom {m.ngeom}, "
+        f"nu {m.nu}, timestep {m.opt.timestep:g} s)"
+    )
 
 
 if __name__ == "__main__":

@@ -11,6 +11,20 @@ from pydantic_core import InitErrorDetails, PydanticCustomError
 
 from ..terms import OBSERVATION_TERMS, REWARD_FEATURES
 from . import geometry as geo
+from .training import Evaluate, Train
+
+def _raise(errors: list[tuple[tuple, str, Any]]) -> None:
+    """Raise one ValidationError carrying every (loc, message, input) with its own location."""
+    if errors:
+        raise ValidationError.from_exception_data("TaskSpec", [
+            InitErrorDetails(type=PydanticCustomError("spec", msg), loc=loc, input=value) for loc, msg, value in errors])
+
+
+def _fail(dotted: str, msg: str) -> None:
+    """Raise a ValidationError at a dotted location."""
+    loc = tuple(int(k) if k.isdigit() else k for k in dotted.split("."))
+    _raise([(loc, msg, None)])
+
 
 Pos = Annotated[float, Field(gt=0)]
 NonNeg = Annotated[float, Field(ge=0)]
@@ -84,9 +98,9 @@ class Scope(Strict):
     def _ranges(self):
         lo, hi = self.insertion
         if lo >= hi:
-            raise ValueError(f"insertion range must be increasing, got {list(self.insertion)}")
+            _fail("insertion", f"insertion range must be increasing, got {list(self.insertion)}")
         if hi >= self.shaft_length:
-            raise ValueError(f"insertion {hi} m must be shorter than the shaft ({self.shaft_length} m)")
+            _fail("insertion", f"insertion {hi} m must be shorter than the shaft ({self.shaft_length} m)")
         if not lo <= self.start.insertion <= hi:
             _fail("start.insertion", f"start insertion {self.start.insertion} m is outside {list(self.insertion)}")
         return self
@@ -177,13 +191,11 @@ class Observation(Strict):
     extra: list[str] = []
     stack: int = Field(1, ge=1, le=16)
 
-    @field_validator("extra")
-    @classmethod
-    def _known(cls, v):
-        for name in v:
-            if name not in OBSERVATION_TERMS:
-                raise ValueError(f"unknown observation term '{name}' (known: {', '.join(OBSERVATION_TERMS)})")
-        return v
+    @model_validator(mode="after")
+    def _known(self):
+        _raise([(("extra", i), f"unknown observation term '{name}' (known: {', '.join(OBSERVATION_TERMS)})", name)
+                for i, name in enumerate(self.extra) if name not in OBSERVATION_TERMS])
+        return self
 
     def terms(self) -> list[str]:
         """Observation term names in order."""
@@ -222,23 +234,6 @@ class Reward(Strict):
         return self
 
 
-class Train(Strict):
-    """Training settings (filled in by the runner)."""
-
-    algo: Literal["PPO", "SAC"] = "PPO"
-    timesteps: int = Field(500_000, ge=1)
-    n_envs: int = Field(8, ge=1, le=256)
-    seed: int = 0
-    hyperparams: dict[str, Any] = {}
-
-
-class Evaluate(Strict):
-    """Evaluation settings (filled in by the runner)."""
-
-    episodes: int = Field(20, ge=1)
-    seed: int = 10_000
-
-
 class TaskSpec(Strict):
     """A whole task: scene, scope, task, episode, actions, observation, reward, train, evaluate."""
 
@@ -256,6 +251,8 @@ class TaskSpec(Strict):
 
     @model_validator(mode="after")
     def _reachable(self):
+        if self.train.algo == "SAC" and self.actions.mode != "continuous":
+            _fail("train.algo", "SAC needs continuous actions: set actions.mode: continuous")
         names = [p.name for p in self.scene.portals]
         if self.scope.portal not in names:
             _fail("scope.portal", f"no portal named '{self.scope.portal}' (portals: {', '.join(names)})")
@@ -305,16 +302,3 @@ class TaskSpec(Strict):
         if dist < cue.distance[0]:
             return f"target is {dist:.3f} m from portal '{p.name}', closer than the cue's minimum distance"
         return None
-
-
-def _raise(errors: list[tuple[tuple, str, Any]]) -> None:
-    """Raise one ValidationError carrying every (loc, message, input) with its own location."""
-    if errors:
-        raise ValidationError.from_exception_data("TaskSpec", [
-            InitErrorDetails(type=PydanticCustomError("spec", msg), loc=loc, input=value) for loc, msg, value in errors])
-
-
-def _fail(dotted: str, msg: str) -> None:
-    """Raise a ValidationError at a dotted location."""
-    loc = tuple(int(k) if k.isdigit() else k for k in dotted.split("."))
-    _raise([(loc, msg, None)])

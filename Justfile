@@ -1,0 +1,28 @@
+# fastrl developer recipes (https://just.systems; `pip install rust-just` provides `just`)
+
+spec := "specs/tracelines.yaml"
+
+# install the package with test and dev tools
+install:
+    pip install -e '.[dev]'
+
+# train, evaluate and record one run of a spec (default: TraceLines)
+run spec=spec *args:
+    fastrl run {{spec}} {{args}}
+
+# the test suite (what CI runs)
+test *args:
+    MUJOCO_GL=egl python -m pytest {{args}}
+
+# benchmarks: env throughput against raw mj_step
+bench:
+    MUJOCO_GL=egl python bench/env_throughput.py
+
+# lint and format check
+lint:
+    ruff check fastrl tests bench
+    ruff format --check fastrl tests bench
+
+# validate every bundled spec
+check:
+    fastrl check specs/*.yaml

@@ -1,0 +1,5 @@
+"""Episode and trajectory data."""
+
+from .episode import EpisodeRecord
+
+__all__ = ["EpisodeRecord"]

@@ -1,0 +1,99 @@
+"""One evaluation episode as columns: scope, camera and images, reward-coloured path, cues, scalars."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import rerun as rr
+
+from ..data.episode import EpisodeRecord
+from ..model.compiler import CompiledTask
+from .shapes import rgba, viridis
+
+GREEN = rgba((0.1, 0.85, 0.2))
+ORANGE = rgba((1.0, 0.55, 0.05))
+SHAFT = rgba((0.55, 0.57, 0.6))
+TIP = rgba((0.95, 0.95, 0.95))
+FRUSTUM_DEPTH = 0.015  # m: where the image plane is drawn in 3D
+
+
+def log_episode(rec: rr.RecordingStream, ep: EpisodeRecord, task: CompiledTask, fov_deg: float,
+                image_size: tuple[int, int] | None = None, world: str = "world/eval/ep_00",
+                metrics: str = "metrics/eval/ep_00") -> None:
+    """Send the whole episode with send_columns on the `step` and `sim_time` timelines."""
+    steps = np.arange(len(ep.time))
+    index = [rr.TimeColumn("step", sequence=steps), rr.TimeColumn("sim_time", duration=np.asarray(ep.time, float))]
+    _log_scope(rec, world, ep, index, task.spec.scope.diameter)
+    _log_camera(rec, world, ep, index, fov_deg, image_size)
+    _log_path(rec, world, ep)
+    _log_cue(rec, world, ep, index, task)
+    _log_scalars(rec, metrics, ep, index)
+
+
+def _log_scope(rec, world: str, ep: EpisodeRecord, index: list, diameter: float) -> None:
+    """The shaft as a 2-point strip per step and the tip as a point."""
+    shaft = np.stack([np.asarray(ep.tip_pos, float), np.asarray(ep.shaft_end, float)], axis=1)
+    rec.log(f"{world}/shaft", rr.LineStrips3D.from_fields(radii=[0.5 * diameter], colors=[SHAFT]), static=True)
+    rec.send_columns(f"{world}/shaft", indexes=index, columns=rr.LineStrips3D.columns(strips=shaft))
+    rec.log(f"{world}/tip", rr.Points3D.from_fields(radii=[0.6 * diameter], colors=[TIP]), static=True)
+    rec.send_columns(f"{world}/tip", indexes=index, columns=rr.Points3D.columns(positions=ep.tip_pos))
+
+
+def _log_camera(rec, world: str, ep: EpisodeRecord, index: list, fov_deg: float, image_size) -> None:
+    """Camera pose per step (MuJoCo wxyz -> xyzw), a static pinhole looking along -Z, and the images."""
+    quat = np.asarray(ep.tip_quat, float)[:, [1, 2, 3, 0]]
+    rec.send_columns(f"{world}/camera", indexes=index,
+                     columns=rr.Transform3D.columns(translation=ep.tip_pos, quaternion=quat))
+    if image_size is None:
+        first = next(iter(ep.images.values()), None)
+        image_size = (first.shape[1], first.shape[0]) if first is not None else (128, 128)
+    w, h = image_size
+    focal = 0.5 * h / math.tan(0.5 * math.radians(fov_deg))
+    image = f"{world}/camera/image"
+    rec.log(image, rr.Pinhole(focal_length=focal, width=w, height=h, camera_xyz=rr.ViewCoordinates.RUB,
+                              image_plane_distance=FRUSTUM_DEPTH), static=True)
+    if not ep.images:
+        return
+    keys = sorted(ep.images)
+    frames = np.stack([np.ascontiguousarray(ep.images[k], np.uint8) for k in keys])
+    n, fh, fw = frames.shape[:3]
+    channels = frames.shape[3] if frames.ndim == 4 else 1
+    model = {1: "L", 3: "RGB", 4: "RGBA"}[channels]
+    fmt = rr.components.ImageFormat(width=fw, height=fh, color_model=model, channel_datatype="U8")
+    rec.log(image, rr.Image.from_fields(format=fmt), static=True)
+    at = np.asarray(keys)
+    img_index = [rr.TimeColumn("step", sequence=at), rr.TimeColumn("sim_time", duration=np.asarray(ep.time)[at])]
+    rec.send_columns(image, indexes=img_index, columns=rr.Image.columns(buffer=frames.reshape(n, -1)))
+
+
+def _log_path(rec, world: str, ep: EpisodeRecord) -> None:
+    """The tip trajectory as 2-point segments coloured by the reward received on each step (static)."""
+    pos = np.asarray(ep.tip_pos, float)
+    if len(pos) < 2:
+        return
+    segs = np.stack([pos[:-1], pos[1:]], axis=1)
+    colors = viridis(np.asarray(ep.reward, float)[1:])
+    rec.log(f"{world}/trajectory", rr.LineStrips3D(segs, radii=0.0005, colors=colors), static=True)
+
+
+def _log_cue(rec, world: str, ep: EpisodeRecord, index: list, task: CompiledTask) -> None:
+    """The current avatar per step, green while all its cues hold, else orange."""
+    pos = task.targets.pos
+    if not len(pos):
+        return
+    k = np.minimum(np.asarray(ep.subtask, int), len(pos) - 1)
+    colors = np.where(np.asarray(ep.green, bool)[:, None], GREEN, ORANGE)
+    rec.log(f"{world}/avatar", rr.Points3D.from_fields(radii=[1.4 * task.targets.size]), static=True)
+    rec.send_columns(f"{world}/avatar", indexes=index,
+                     columns=rr.Points3D.columns(positions=pos[k], colors=colors))
+
+
+def _log_scalars(rec, metrics: str, ep: EpisodeRecord, index: list) -> None:
+    """Reward, every reward feature and the subtask count as time series."""
+    series = {"reward": ep.reward, "subtask": ep.subtask}
+    series.update({f"features/{name}": v for name, v in ep.features.items()})
+    for name, values in series.items():
+        path = f"{metrics}/{name}"
+        rec.log(path, rr.SeriesLines(names=name.rsplit("/", 1)[-1], widths=1.5), static=True)
+        rec.send_columns(path, indexes=index, columns=rr.Scalars.columns(scalars=np.asarray(values, float)))

@@ -1,0 +1,65 @@
+"""The static 3D scene of a compiled task: dome shell, plate, portals, avatars, line."""
+
+from __future__ import annotations
+
+import numpy as np
+import rerun as rr
+
+from ..model.compiler import CompiledTask
+from ..model.dome import PLATE_RGBA, PORTAL_RGBA, SHELL_RGBA
+from ..model.targets import LINE_RGBA
+from ..spec import geometry as geo
+from .shapes import disk, hemisphere, rgba, ring
+
+AVATAR_RGBA = (1.0, 0.6, 0.1)
+SHELL_ALPHA = 0.35
+
+
+def log_scene(rec: rr.RecordingStream, task: CompiledTask, root: str = "world") -> None:
+    """Log the task's static scene under `{root}/scene` and Z-up view coordinates on `root`."""
+    rec.log(root, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    scene = task.spec.scene
+    base = f"{root}/scene"
+    if getattr(scene, "kind", None) == "fast_dome":
+        _log_dome(rec, base, scene, task.spec.scope.portal)
+    _log_targets(rec, base, task)
+
+
+def _log_dome(rec: rr.RecordingStream, base: str, scene, scope_portal: str) -> None:
+    """Shell with holes at the portals, base plate, and a labelled ring per portal."""
+    r = scene.radius
+    holes = [(geo.sphere_point(1.0, p.azimuth, p.elevation), 1.4 * p.radius / r) for p in scene.portals]
+    verts, normals, tris = hemisphere(r, holes)
+    # Only back faces: from outside, the near wall is culled and the inside of the dome shows.
+    rec.log(f"{base}/shell", rr.Mesh3D(
+        vertex_positions=verts, vertex_normals=normals, triangle_indices=tris,
+        albedo_factor=rgba(SHELL_RGBA, SHELL_ALPHA), face_rendering=rr.components.MeshFaceRendering.Back),
+        static=True)
+    rim = ring(np.zeros(3), np.array([0.0, 0.0, 1.0]), r + scene.thickness, n=96)
+    rec.log(f"{base}/shell/rim", rr.LineStrips3D([rim], radii=0.0008, colors=rgba(SHELL_RGBA) // 2 + 64), static=True)
+    pv, pt = disk(r + 0.03, z=-0.0003)
+    rec.log(f"{base}/plate", rr.Mesh3D(vertex_positions=pv, triangle_indices=pt, albedo_factor=rgba(PLATE_RGBA),
+                                        vertex_normals=np.tile([0.0, 0.0, 1.0], (len(pv), 1))), static=True)
+    strips, labels = [], []
+    for p in scene.portals:
+        point = geo.sphere_point(r, p.azimuth, p.elevation)
+        strips.append(ring(point, point, 1.4 * p.radius))
+        labels.append(f"{p.name} (scope)" if p.name == scope_portal else p.name)
+    rec.log(f"{base}/portals", rr.LineStrips3D(strips, radii=0.0012, colors=rgba(PORTAL_RGBA), labels=labels,
+                                               show_labels=True), static=True)
+
+
+def _log_targets(rec: rr.RecordingStream, base: str, task: CompiledTask) -> None:
+    """Avatars as points with an 'up' arrow and index label; TraceLines' line as a strip."""
+    t = task.targets
+    n = len(t)
+    if n:
+        rec.log(f"{base}/avatars", rr.Points3D(
+            t.pos, radii=t.size, colors=rgba(AVATAR_RGBA, 1.0), labels=[str(i) for i in range(n)],
+            show_labels=n <= 20), static=True)
+        rec.log(f"{base}/avatars/up", rr.Arrows3D(
+            origins=t.pos, vectors=2.0 * t.size * t.up, radii=0.15 * t.size, colors=rgba((0.1, 0.1, 0.1))),
+            static=True)
+    if t.line is not None:
+        width = task.spec.task.line.width if task.spec.task.line else 0.0015
+        rec.log(f"{base}/line", rr.LineStrips3D([t.line], radii=0.5 * width, colors=rgba(LINE_RGBA)), static=True)

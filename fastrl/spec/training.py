@@ -1,0 +1,111 @@
+"""The train and evaluate sections: algorithm, hyperparameters checked per algorithm, budgets."""
+
+from __future__ import annotations
+
+import difflib
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic_core import InitErrorDetails, PydanticCustomError
+
+
+class Params(BaseModel):
+    """Base for hyperparameter sets: unknown names are errors."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class PPOParams(Params):
+    """stable-baselines3 PPO hyperparameters (same names), plus the network."""
+
+    learning_rate: float = Field(3e-4, gt=0)
+    n_steps: int = Field(256, ge=2)
+    batch_size: int = Field(512, ge=2)
+    n_epochs: int = Field(5, ge=1)
+    gamma: float = Field(0.99, gt=0, le=1)
+    gae_lambda: float = Field(0.95, ge=0, le=1)
+    clip_range: float = Field(0.2, gt=0)
+    ent_coef: float = Field(0.0, ge=0)
+    vf_coef: float = Field(0.5, ge=0)
+    max_grad_norm: float = Field(0.5, gt=0)
+    target_kl: float | None = Field(None, gt=0)
+    normalize_advantage: bool = True
+    net_arch: list[int] = [128, 128]
+    activation: Literal["tanh", "relu"] = "tanh"
+
+
+class SACParams(Params):
+    """stable-baselines3 SAC hyperparameters (same names), plus the network."""
+
+    learning_rate: float = Field(3e-4, gt=0)
+    buffer_size: int = Field(300_000, ge=1000)
+    learning_starts: int = Field(5_000, ge=0)
+    batch_size: int = Field(256, ge=2)
+    tau: float = Field(0.005, gt=0, le=1)
+    gamma: float = Field(0.99, gt=0, le=1)
+    train_freq: int = Field(1, ge=1)
+    gradient_steps: int = Field(1, ge=-1)
+    ent_coef: float | Literal["auto"] = "auto"
+    target_entropy: float | Literal["auto"] = "auto"
+    net_arch: list[int] = [256, 256]
+    activation: Literal["tanh", "relu"] = "relu"
+
+
+ALGO_PARAMS: dict[str, type[Params]] = {"PPO": PPOParams, "SAC": SACParams}
+
+
+class Normalize(BaseModel):
+    """Running normalisation of observations and rewards (VecNormalize)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    obs: bool = True
+    reward: bool = True
+
+
+class Train(BaseModel):
+    """Which algorithm, its hyperparameters (checked against it), budget, parallel envs, seed."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    algo: Literal["PPO", "SAC"] = "PPO"
+    timesteps: int = Field(500_000, ge=1)
+    n_envs: int = Field(8, ge=1, le=256)
+    seed: int = Field(0, ge=0)
+    hyperparams: dict[str, Any] = {}
+    normalize: Normalize = Normalize()
+    checkpoint_every: int = Field(100_000, ge=1, description="timesteps between checkpoints")
+    log_every: int = Field(10_000, ge=1, description="timesteps between training-curve points")
+
+    @model_validator(mode="after")
+    def _check_hyperparams(self):
+        cls = ALGO_PARAMS[self.algo]
+        try:
+            cls.model_validate(self.hyperparams)
+        except ValidationError as err:
+            details = []
+            for e in err.errors():
+                msg = e["msg"]
+                if e["type"] == "extra_forbidden":
+                    name = str(e["loc"][0])
+                    close = difflib.get_close_matches(name, list(cls.model_fields), n=1)
+                    hint = f" (did you mean '{close[0]}'?)" if close else f" (known: {', '.join(cls.model_fields)})"
+                    msg = f"'{name}' is not a {self.algo} hyperparameter{hint}"
+                details.append(InitErrorDetails(type=PydanticCustomError("hyperparam", msg),
+                                                loc=("hyperparams", *e["loc"]), input=e["input"]))
+            raise ValidationError.from_exception_data("Train", details) from None
+        return self
+
+    def params(self) -> Params:
+        """The validated hyperparameters of the chosen algorithm, defaults filled in."""
+        return ALGO_PARAMS[self.algo].model_validate(self.hyperparams)
+
+
+class Evaluate(BaseModel):
+    """Deterministic evaluation episodes after training, and what of them goes into the recording."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    episodes: int = Field(20, ge=1)
+    seed: int = Field(10_000, ge=0)
+    image_every: int = Field(4, ge=0, description="log the endoscope image every k steps (0: never)")
+    image_size: tuple[int, int] = Field((128, 128), description="width, height of logged endoscope images")
+    record_episodes: int = Field(20, ge=0, description="how many evaluation episodes go into the recording")
+    expert: bool = Field(True, description="also evaluate the scripted expert on the same seeds, for reference")
