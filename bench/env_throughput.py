@@ -118,7 +118,7 @@ def physics_loop(model, data, ctrls: list, states: dict, substeps: int, start: i
 
 
 def record(env, actions: list, seed: int, n: int = N_RECORD):
-    """Run the env n steps (the warm-up) keeping its ctrl per step and its state at each reset."""
+    """Run the env n steps (the warm-up); keep ctrl per step, state at resets, µs/step, contacts."""
     env.reset(seed=seed)
     model, data = env.unwrapped.model, env.unwrapped.data
     buf = np.empty(mujoco.mj_stateSize(model, STATE))
@@ -133,7 +133,30 @@ def record(env, actions: list, seed: int, n: int = N_RECORD):
             env.reset()
             mujoco.mj_getState(model, data, buf, STATE)
             states[k + 1] = buf.copy()
-    return ctrls, states, (time.perf_counter() - t0) / n, ncon / n
+    return ctrls, states, 1e6 * (time.perf_counter() - t0) / n, ncon / n
+
+
+def wrapper_cost(genv, n: int = 100_000) -> float:
+    """µs per step of gymnasium's wrapper chain alone: the inner step replaced by a canned reply."""
+    inner = genv.unwrapped
+    reply = (np.zeros(inner.observation_space.shape, np.float32), 0.0, False, False, {})
+
+    def stub(action):
+        return reply
+
+    inner.step = stub  # instance attribute shadows FastEnv.step; removed below
+    try:
+        t0 = time.perf_counter()
+        for _ in range(n):
+            genv.step(0)
+        wrapped = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        for _ in range(n):
+            inner.step(0)
+        bare = time.perf_counter() - t0
+    finally:
+        del inner.step
+    return 1e6 * (wrapped - bare) / n
 
 
 def stats(seconds: list[float], n: int) -> dict:
@@ -155,12 +178,17 @@ def bench_task(name: str, seconds: float, rounds: int, seed: int, log) -> dict:
     data = mujoco.MjData(model)
     setup_s = time.perf_counter() - t_setup
 
-    n = max(200, int(seconds / max(warm_us_per_step * 1e-6, 1e-6)))  # equal work in every round
     env.reset(seed=seed)
+    calib_s, _ = env_loop(env, actions, 0, 300)  # the record pass is slower (copies, first steps)
+    n = max(200, int(seconds * 300 / calib_s))  # equal work in every round, about `seconds` long
+    env.reset(seed=seed)
+    wrapper_us = None
     if genv is not None:
         genv.reset(seed=seed)
-        env_loop(genv, actions, 0, min(n, 500))  # warm-up (and the passive checker's first call)
-    physics_loop(model, data, ctrls, states, substeps, 0, min(n, 500))
+        env_loop(genv, actions, 0, 300)  # warm-up (and the passive checker's first step)
+        wrapper_us = wrapper_cost(genv)
+        genv.reset(seed=seed)
+    physics_loop(model, data, ctrls, states, substeps, 0, 300)
     log(f"[dim]{name}: setup {setup_s:.1f} s, {rounds} rounds x {n} steps per measurement[/dim]")
 
     runs = {"env": [], "physics": [], "gym": []}
@@ -220,6 +248,7 @@ def bench_task(name: str, seconds: float, rounds: int, seed: int, log) -> dict:
         out["gym"]["id"] = gym_id
         out["gym"]["steps_per_s"] = 1e6 / out["gym"]["median_us"]
         out["gym"]["wrapper_us"] = out["gym"]["median_us"] - env_us
+        out["gym"]["wrapper_isolated_us"] = wrapper_us
         out["gym_resets"] = resets["gym"]
     out["pass_steps_per_s"] = out["env"]["steps_per_s"] >= TARGET_STEPS_PER_S
     out["pass_overhead"] = out["overhead_ratio"] <= TARGET_OVERHEAD_RATIO
@@ -242,8 +271,9 @@ def print_report(console, info: dict, results: dict, elapsed: float) -> None:
                   f"gymnasium {info['gymnasium']}, fastrl {info['fastrl']}, "
                   f"MUJOCO_GL={info['mujoco_gl']}")
     names = list(results)
-    table = Table(title="single env, state obs, spec's action mode; median over rounds "
-                        "(min | max in brackets)", title_justify="left")
+    console.print("Single env, state observation, the spec's action mode; times are medians "
+                  "over rounds, [min | max] in brackets.")
+    table = Table()
     table.add_column("metric", style="bold")
     for name in names:
         table.add_column(name, justify="right")
@@ -275,7 +305,8 @@ def print_report(console, info: dict, results: dict, elapsed: float) -> None:
     row("overhead / physics", lambda r: f"{r['overhead_ratio']:.2f}")
     row("gym.make env steps/s", lambda r: f"{r['gym']['steps_per_s']:,.0f}")
     row("gym.make µs/step", lambda r: spread(r["gym"]))
-    row("  wrapper cost µs/step", lambda r: f"{r['gym']['wrapper_us']:+.1f}")
+    row("  gym - env µs/step", lambda r: f"{r['gym']['wrapper_us']:+.1f}")
+    row("  wrappers alone µs/step", lambda r: f"{r['gym']['wrapper_isolated_us']:.2f}")
     row("reset() ms (min)", lambda r: f"{r['reset_ms']['median']:.2f} ({r['reset_ms']['min']:.2f})")
     row("render() ms (min)", lambda r: (f"{r['render']['median_ms']:.2f} ({r['render']['min_ms']:.2f})"
                                         if "median_ms" in r["render"] else r["render"]["error"][:40]))

@@ -159,5 +159,135 @@ def compile_(
     )
 
 
+RunsOpt = Annotated[Path, typer.Option("--runs", help="root folder of run directories")]
+
+
+@app.command()
+def run(
+    spec: Annotated[Path | None, typer.Argument(metavar="SPEC", help="task spec YAML", show_default=False)] = None,
+    set_: SetOpt = None,
+    algo: Annotated[str | None, typer.Option(help="shortcut for --set train.algo=...")] = None,
+    seed: Annotated[int | None, typer.Option(help="shortcut for --set train.seed=...")] = None,
+    timesteps: Annotated[int | None, typer.Option(help="shortcut for --set train.timesteps=...")] = None,
+    resume: Annotated[Path | None, typer.Option(help="continue RUN_DIR from its newest checkpoint")] = None,
+    runs: RunsOpt = Path("runs"),
+    progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
+) -> None:
+    """Train an agent on a spec, evaluate it and record everything to RUN_DIR/recording.rrd."""
+    from .runner import RunInterrupted, resume_run, start_run
+
+    overrides = list(set_ or [])
+    overrides += [f"train.algo={algo}"] if algo else []
+    overrides += [f"train.seed={seed}"] if seed is not None else []
+    overrides += [f"train.timesteps={timesteps}"] if timesteps is not None else []
+    if (spec is None) == (resume is None):
+        err.print("give a SPEC to start a run, or --resume RUN_DIR to continue one (not both)", markup=False)
+        raise typer.Exit(code=2)
+    try:
+        if resume is not None:
+            run_dir = resume_run(resume, out, progress)
+        else:
+            load_or_exit(spec, overrides)
+            run_dir = start_run(spec, overrides, runs, out, progress)
+    except RunInterrupted as stop:
+        err.print(f"interrupted at {stop.timesteps} timesteps; checkpoint and recording saved in {stop.run}",
+                  markup=False)
+        err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
+        raise typer.Exit(code=130) from None
+    except SpecError as e:
+        report(e)
+        raise typer.Exit(code=2) from None
+    except FileNotFoundError as e:
+        err.print(str(e), markup=False)
+        raise typer.Exit(code=2) from None
+    results = json.loads((run_dir / "eval.json").read_text())
+    print_eval(results)
+    out.print(f"run saved in {escape(str(run_dir))}; view it with: fastrl view {escape(str(run_dir))}")
+
+
+def print_eval(results: dict) -> None:
+    """A table of evaluation figures, agent next to expert."""
+    from rich.table import Table
+
+    table = Table(title=f"evaluation over {len(results['seeds'])} episodes")
+    table.add_column("policy")
+    for col in ("success", "subtasks", "return", "time (s)", "path (m)"):
+        table.add_column(col, justify="right")
+    for who in ("agent", "expert"):
+        r = results.get(who)
+        if r:
+            table.add_row(who, f"{r['success_rate']:.0%}", f"{r['subtasks_completed']:.1%}",
+                          f"{r['return_mean']:.1f}", f"{r['episode_time_mean']:.1f}", f"{r['path_length_mean']:.3f}")
+    out.print(table)
+
+
+@app.command(name="eval")
+def eval_(
+    run_dir: Annotated[Path | None, typer.Argument(metavar="RUN_DIR", show_default=False)] = None,
+    expert: Annotated[Path | None, typer.Option(metavar="SPEC", help="evaluate the scripted expert on SPEC")] = None,
+    episodes: Annotated[int | None, typer.Option(help="number of episodes (default: the spec's)")] = None,
+    output: Annotated[Path | None, typer.Option("-o", "--output", help="write the figures as JSON")] = None,
+) -> None:
+    """Re-evaluate a saved run (deterministic episodes), or the scripted expert on a spec."""
+    from .runner import evaluate_expert, evaluate_saved
+
+    if (run_dir is None) == (expert is None):
+        err.print("give RUN_DIR, or --expert SPEC", markup=False)
+        raise typer.Exit(code=2)
+    try:
+        results = evaluate_saved(run_dir, episodes) if run_dir else evaluate_expert(expert, (), episodes)
+    except SpecError as e:
+        report(e)
+        raise typer.Exit(code=2) from None
+    except FileNotFoundError as e:
+        err.print(str(e), markup=False)
+        raise typer.Exit(code=2) from None
+    print_eval(results)
+    if output is not None:
+        write_text(output, json.dumps(results, indent=2))
+
+
+@app.command()
+def view(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR", show_default=False)]) -> None:
+    """Open a run's recording in the Rerun viewer (or say how, where there is no display)."""
+    import os
+    import shutil
+    import subprocess
+
+    rrd = run_dir / "recording.rrd" if run_dir.is_dir() else run_dir
+    if not rrd.exists():
+        err.print(f"no recording at {rrd}", markup=False)
+        raise typer.Exit(code=2)
+    viewer = shutil.which("rerun")
+    if viewer and (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        subprocess.Popen([viewer, str(rrd)])
+        out.print(f"opening {escape(str(rrd))} in the Rerun viewer")
+        return
+    out.print(f"no display here: copy {escape(str(rrd))} to a machine with a display and run `rerun {rrd.name}`, "
+              f"or serve it to a browser with `rerun --web-viewer {escape(str(rrd))}`")
+
+
+@app.command(name="runs")
+def runs_(root: RunsOpt = Path("runs")) -> None:
+    """List runs with their headline figures, newest first."""
+    from rich.table import Table
+
+    from .runner.rundir import list_runs
+
+    rows = list_runs(root)
+    if not rows:
+        out.print(f"no runs under {escape(str(root))}")
+        return
+    table = Table()
+    for col in ("run", "spec", "algo", "seed", "status", "timesteps", "wall", "success", "subtasks"):
+        table.add_column(col)
+    for r in rows:
+        pct = lambda v: "-" if v is None else f"{v:.0%}"  # noqa: E731
+        table.add_row(r["run"], r["spec"] or "?", r["algo"] or "?", str(r["seed"]), r["status"],
+                      str(r["timesteps"] or "-"), "-" if r["wall_s"] is None else f"{r['wall_s']:.0f}s",
+                      pct(r["success"]), pct(r["subtasks"]))
+    out.print(table)
+
+
 if __name__ == "__main__":
     app()

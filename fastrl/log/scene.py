@@ -56,10 +56,18 @@ def _log_targets(rec: rr.RecordingStream, base: str, task: CompiledTask) -> None
     if n:
         rec.log(f"{base}/avatars", rr.Points3D(
             t.pos, radii=t.size, colors=rgba(AVATAR_RGBA, 1.0), labels=[str(i) for i in range(n)],
-            show_labels=n <= 20), static=True)
+            show_labels=_spread(t.pos) > 0.02), static=True)
         rec.log(f"{base}/avatars/up", rr.Arrows3D(
             origins=t.pos, vectors=2.0 * t.size * t.up, radii=0.15 * t.size, colors=rgba((0.1, 0.1, 0.1))),
             static=True)
     if t.line is not None:
         width = task.spec.task.line.width if task.spec.task.line else 0.0015
         rec.log(f"{base}/line", rr.LineStrips3D([t.line], radii=0.5 * width, colors=rgba(LINE_RGBA)), static=True)
+
+
+def _spread(pos: np.ndarray) -> float:
+    """Smallest distance between two points (inf for fewer than two): labels only when they do not overlap."""
+    if len(pos) < 2:
+        return float("inf")
+    d = np.linalg.norm(pos[:, None] - pos[None], axis=-1)
+    return float(d[np.triu_indices(len(pos), 1)].min())

@@ -64,3 +64,15 @@ def summarize(episodes: list[EpisodeRecord]) -> dict:
         "features_mean": feats,
         "per_episode": sums,
     }
+
+
+def evaluate(env, policy: Policy, seeds: list[int], image_every: int = 0, record: int = 0,
+             on_reset: Callable | None = None, on_episode: Callable | None = None) -> tuple[dict, list[EpisodeRecord]]:
+    """Deterministic episodes on the given seeds; images only for the first `record` episodes."""
+    episodes = []
+    for i, seed in enumerate(seeds):
+        ep = record_episode(env, policy, seed, image_every if i < record else 0, on_reset)
+        episodes.append(ep)
+        if on_episode is not None:
+            on_episode(i, ep)
+    return summarize(episodes), episodes

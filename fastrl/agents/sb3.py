@@ -1,0 +1,113 @@
+"""Forward RL on stable-baselines3: vectorised envs, PPO/SAC from the spec, pickle-free checkpoints."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import torch
+from stable_baselines3 import PPO, SAC
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
+
+from ..env.fast_env import FastEnv
+from ..spec.models import TaskSpec
+
+ALGOS = {"PPO": PPO, "SAC": SAC}
+ACTIVATIONS = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}
+
+
+class FreshInfoVecEnv(DummyVecEnv):
+    """DummyVecEnv without the deep copy of infos: FastEnv builds fresh info dicts every step."""
+
+    def step_wait(self):
+        """Step every env, resetting finished ones, in SB3's VecEnv convention."""
+        for i, env in enumerate(self.envs):
+            obs, self.buf_rews[i], terminated, truncated, info = env.step(self.actions[i])
+            self.buf_dones[i] = terminated or truncated
+            info["TimeLimit.truncated"] = truncated and not terminated
+            if self.buf_dones[i]:
+                info["terminal_observation"] = obs
+                obs, self.reset_infos[i] = env.reset()
+            self.buf_infos[i] = info
+            self._save_obs(i, obs)
+        return self._obs_from_buf(), np.copy(self.buf_rews), np.copy(self.buf_dones), list(self.buf_infos)
+
+
+def make_vec_env(spec: TaskSpec, n_envs: int, seed: int) -> VecEnv:
+    """Vectorised FastEnvs in one process (cheap envs step faster so), optionally normalised."""
+    venv = FreshInfoVecEnv([lambda: FastEnv(spec) for _ in range(n_envs)])
+    venv.seed(seed)
+    norm = spec.train.normalize
+    if norm.obs or norm.reward:
+        venv = VecNormalize(venv, norm_obs=norm.obs, norm_reward=norm.reward, gamma=spec.train.params().gamma)
+    return venv
+
+
+def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None) -> BaseAlgorithm:
+    """The spec's algorithm with its hyperparameters on the vectorised env."""
+    params = spec.train.params().model_dump()
+    net, act = params.pop("net_arch"), ACTIVATIONS[params.pop("activation")]
+    arch = {"pi": net, "vf": net} if spec.train.algo == "PPO" else {"pi": net, "qf": net}
+    torch.set_num_threads(1)
+    return ALGOS[spec.train.algo]("MlpPolicy", venv, seed=spec.train.seed if seed is None else seed, verbose=0,
+                                  device="cpu", policy_kwargs={"net_arch": arch, "activation_fn": act}, **params)
+
+
+def _optimizers(model: BaseAlgorithm) -> dict[str, torch.optim.Optimizer]:
+    """Every optimizer the algorithm trains with, by name."""
+    if isinstance(model, SAC):
+        opts = {"actor": model.actor.optimizer, "critic": model.critic.optimizer}
+        if model.ent_coef_optimizer is not None:
+            opts["ent_coef"] = model.ent_coef_optimizer
+        return opts
+    return {"policy": model.policy.optimizer}
+
+
+def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict) -> Path:
+    """Write weights and optimizer states (torch tensors only), normalisation stats (npz) and state (JSON)."""
+    path.mkdir(parents=True, exist_ok=True)
+    tensors = {"policy": model.policy.state_dict(), "optimizers": {k: o.state_dict() for k, o in _optimizers(model).items()}}
+    if isinstance(model, SAC) and model.log_ent_coef is not None:
+        tensors["log_ent_coef"] = model.log_ent_coef.detach().clone()
+    tmp = path / "weights.pt.tmp"
+    torch.save(tensors, tmp)
+    tmp.replace(path / "weights.pt")
+    if isinstance(venv, VecNormalize):
+        np.savez(path / "normalize.npz", obs_mean=venv.obs_rms.mean, obs_var=venv.obs_rms.var,
+                 obs_count=venv.obs_rms.count, ret_mean=venv.ret_rms.mean, ret_var=venv.ret_rms.var,
+                 ret_count=venv.ret_rms.count)
+    (path / "state.json").write_text(json.dumps({**state, "timesteps": int(model.num_timesteps)}, indent=2))
+    return path
+
+
+def load_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv | None) -> dict:
+    """Restore what save_checkpoint wrote into a freshly built model (and its VecNormalize)."""
+    tensors = torch.load(path / "weights.pt", map_location="cpu", weights_only=True)
+    model.policy.load_state_dict(tensors["policy"])
+    for name, opt in _optimizers(model).items():
+        opt.load_state_dict(tensors["optimizers"][name])
+    if "log_ent_coef" in tensors and isinstance(model, SAC):
+        with torch.no_grad():
+            model.log_ent_coef.copy_(tensors["log_ent_coef"])
+    stats = path / "normalize.npz"
+    if isinstance(venv, VecNormalize) and stats.exists():
+        z = np.load(stats)
+        venv.obs_rms.mean, venv.obs_rms.var, venv.obs_rms.count = z["obs_mean"], z["obs_var"], float(z["obs_count"])
+        venv.ret_rms.mean, venv.ret_rms.var, venv.ret_rms.count = z["ret_mean"], z["ret_var"], float(z["ret_count"])
+    state = json.loads((path / "state.json").read_text())
+    model.num_timesteps = int(state["timesteps"])
+    return state
+
+
+def policy_function(model: BaseAlgorithm, venv: VecEnv | None):
+    """obs -> deterministic action, applying the training's observation normalisation."""
+    norm = venv if isinstance(venv, VecNormalize) and venv.norm_obs else None
+
+    def act(obs):
+        x = norm.normalize_obs(obs[None]) if norm is not None else obs[None]
+        action, _ = model.predict(x, deterministic=True)
+        return action[0] if action.ndim > 1 else int(action[0])
+
+    return act

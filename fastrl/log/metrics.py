@@ -1,0 +1,84 @@
+"""Training curves on the `timesteps` timeline and the evaluation summary as markdown."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import rerun as rr
+
+
+def _finite(value) -> bool:
+    """True for a real, finite number."""
+    try:
+        return value is not None and math.isfinite(float(value))
+    except (TypeError, ValueError):
+        return False
+
+
+class TrainingCurves:
+    """Writes training metrics under `{root}/<name>`, styling each series once."""
+
+    def __init__(self, rec: rr.RecordingStream, root: str = "metrics/train"):
+        self.rec, self.root, self.styled = rec, root, set()
+
+    def _style(self, name: str) -> str:
+        """Entity path of a metric; logs its static SeriesLines the first time."""
+        path = f"{self.root}/{name.strip('/')}"
+        if path not in self.styled:
+            self.rec.log(path, rr.SeriesLines(names=name, widths=1.5), static=True)
+            self.styled.add(path)
+        return path
+
+    def row(self, timesteps: int, metrics: dict[str, float]) -> None:
+        """One value per metric at `timesteps`; None and NaN are skipped."""
+        index = [rr.TimeColumn("timesteps", sequence=[int(timesteps)])]
+        for name, value in metrics.items():
+            if _finite(value):
+                self.rec.send_columns(self._style(name), indexes=index,
+                                      columns=rr.Scalars.columns(scalars=[float(value)]))
+
+    def columns(self, timesteps: np.ndarray, metrics: dict[str, np.ndarray]) -> None:
+        """Many rows per metric at once; NaN entries are dropped per metric."""
+        ts = np.asarray(timesteps, np.int64)
+        for name, values in metrics.items():
+            v = np.asarray(values, float)  # None -> NaN
+            if len(v) != len(ts):
+                raise ValueError(f"metric '{name}' has {len(v)} values for {len(ts)} timesteps")
+            keep = np.isfinite(v)
+            if keep.any():
+                self.rec.send_columns(self._style(name), indexes=[rr.TimeColumn("timesteps", sequence=ts[keep])],
+                                      columns=rr.Scalars.columns(scalars=v[keep]))
+
+
+def _fmt(x) -> str:
+    """A number in a short readable form."""
+    if isinstance(x, (bool, np.bool_)):
+        return "yes" if x else "no"
+    if isinstance(x, (int, np.integer)):
+        return str(int(x))
+    return f"{float(x):.4g}" if _finite(x) else "–"
+
+
+def summary_markdown(summary: dict, title: str = "Evaluation") -> str:
+    """Markdown of the headline figures of `fastrl.runner.evaluate.summarize` output."""
+    g = summary.get
+    lines = [f"## {title}", "", "| figure | value |", "|---|---|",
+             f"| episodes | {_fmt(g('episodes', 0))} |",
+             f"| success rate | {_fmt(100 * g('success_rate', math.nan))} % |",
+             f"| subtasks completed | {_fmt(100 * g('subtasks_completed', math.nan))} % |",
+             f"| return | {_fmt(g('return_mean', math.nan))} ± {_fmt(g('return_std', math.nan))} |",
+             f"| episode time | {_fmt(g('episode_time_mean', math.nan))} s |",
+             f"| path length | {_fmt(100 * g('path_length_mean', math.nan))} cm |"]
+    feats = g("features_mean") or {}
+    if feats:
+        lines += ["", "### Reward features (mean sum per episode)", "", "| feature | value |", "|---|---|"]
+        lines += [f"| {k} | {_fmt(v)} |" for k, v in feats.items()]
+    eps = g("per_episode") or []
+    if eps:
+        lines += ["", "### Episodes", "", "| # | seed | success | subtasks | return | time (s) | contacts |",
+                  "|---|---|---|---|---|---|---|"]
+        lines += [f"| {i} | {_fmt(e.get('seed', ''))} | {_fmt(e.get('success', False))} | "
+                  f"{_fmt(e.get('subtasks', 0))}/{_fmt(e.get('subtasks_total', 0))} | {_fmt(e.get('return', math.nan))} | "
+                  f"{_fmt(e.get('episode_time', math.nan))} | {_fmt(e.get('contacts', 0))} |" for i, e in enumerate(eps)]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,5 @@
+"""Run stages: run directory, training with checkpoints, evaluation, recording."""
+
+from .run import RunInterrupted, evaluate_expert, evaluate_saved, resume_run, start_run
+
+__all__ = ["RunInterrupted", "evaluate_expert", "evaluate_saved", "resume_run", "start_run"]

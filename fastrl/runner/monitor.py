@@ -1,0 +1,115 @@
+"""Training callback: episode statistics, curves to Rerun and metrics.jsonl, checkpoints, progress bar."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import time
+from collections import deque
+from pathlib import Path
+
+import numpy as np
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.vec_env import VecNormalize
+
+from ..agents.sb3 import save_checkpoint
+
+KEEP_CHECKPOINTS = 3
+
+
+class TrainingMonitor(BaseCallback):
+    """Collects per-episode figures from env infos and logs them every `log_every` timesteps."""
+
+    def __init__(self, run: Path, feature_names: list[str], total: int, log_every: int, checkpoint_every: int,
+                 recorder=None, progress: bool = True):
+        super().__init__()
+        self.run, self.names, self.total = run, feature_names, total
+        self.log_every, self.checkpoint_every = log_every, checkpoint_every
+        self.recorder = recorder
+        self.recent = deque(maxlen=100)
+        self.window: list[dict] = []
+        self.episodes = 0
+        self.next_log = self.next_ckpt = self.next_tick = 0
+        self.started = time.perf_counter()
+        self.start_steps = 0
+        self.progress = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                                 TextColumn("{task.fields[rate]:>6} steps/s"), TimeElapsedColumn(),
+                                 TimeRemainingColumn(), TextColumn("{task.fields[status]}"), disable=not progress)
+        self.task_id = None
+
+    def _on_training_start(self) -> None:
+        n = self.training_env.num_envs
+        self.ret, self.feats = np.zeros(n), np.zeros((n, len(self.names)))
+        self.start_steps = self.num_timesteps
+        self.started = time.perf_counter()
+        self.next_log = self.num_timesteps + self.log_every
+        self.next_ckpt = self.num_timesteps + self.checkpoint_every
+        self.progress.start()
+        self.task_id = self.progress.add_task("training", total=self.total, completed=self.num_timesteps,
+                                              rate="-", status="")
+
+    def _on_step(self) -> bool:
+        env = self.training_env
+        rewards = env.get_original_reward() if isinstance(env, VecNormalize) else self.locals["rewards"]
+        self.ret += rewards
+        for i, (info, done) in enumerate(zip(self.locals["infos"], self.locals["dones"])):
+            self.feats[i] += [info["features"][n] for n in self.names]
+            if done:
+                ep = {"return": float(self.ret[i]), "success": float(info["success"]),
+                      "subtasks": info["subtask"] / max(1, info["subtasks_total"]), "time": info["time"],
+                      "features": self.feats[i].copy()}
+                self.recent.append(ep)
+                self.window.append(ep)
+                self.episodes += 1
+                self.ret[i], self.feats[i] = 0.0, 0.0
+        if self.num_timesteps >= self.next_tick:
+            self.next_tick += 2048
+            self.progress.update(self.task_id, completed=self.num_timesteps, rate=f"{self.rate():.0f}")
+        if self.num_timesteps >= self.next_log:
+            self.log_point()
+            self.next_log += self.log_every
+        if self.num_timesteps >= self.next_ckpt:
+            self.checkpoint()
+            self.next_ckpt += self.checkpoint_every
+        return True
+
+    def _on_training_end(self) -> None:
+        self.progress.stop()
+
+    def rate(self) -> float:
+        """Training steps per second in this session."""
+        return (self.num_timesteps - self.start_steps) / max(1e-9, time.perf_counter() - self.started)
+
+    def log_point(self) -> dict:
+        """Aggregate the episodes since the last point, add losses, write and send them."""
+        eps = self.window or list(self.recent)[-10:]
+        m: dict[str, float] = {"fps": self.rate(), "episodes": float(self.episodes)}
+        if eps:
+            m.update({"episode/return": float(np.mean([e["return"] for e in eps])),
+                      "episode/success_rate": float(np.mean([e["success"] for e in eps])),
+                      "episode/subtasks": float(np.mean([e["subtasks"] for e in eps])),
+                      "episode/time": float(np.mean([e["time"] for e in eps]))})
+            feats = np.mean([e["features"] for e in eps], axis=0)
+            m.update({f"features/{n}": float(v) for n, v in zip(self.names, feats)})
+        for key, value in self.model.logger.name_to_value.items():
+            if key.startswith("train/") and isinstance(value, (int, float)) and math.isfinite(value):
+                m[f"loss/{key[6:]}"] = float(value)
+        self.window = []
+        with (self.run / "metrics.jsonl").open("a") as f:
+            f.write(json.dumps({"timesteps": int(self.num_timesteps), **m}) + "\n")
+        if self.recorder is not None:
+            self.recorder.log_training(int(self.num_timesteps), m)
+        status = f"success {m['episode/success_rate']:.0%}  subtasks {m['episode/subtasks']:.0%}" if eps else ""
+        self.progress.update(self.task_id, completed=self.num_timesteps, rate=f"{m['fps']:.0f}", status=status)
+        return m
+
+    def checkpoint(self) -> Path:
+        """Save a checkpoint and keep only the newest few."""
+        path = save_checkpoint(self.run / "checkpoints" / f"{self.num_timesteps:010d}", self.model,
+                               self.training_env, {"episodes": self.episodes})
+        old = sorted((self.run / "checkpoints").glob("[0-9]*"))[:-KEEP_CHECKPOINTS]
+        for p in old:
+            shutil.rmtree(p, ignore_errors=True)
+        return path

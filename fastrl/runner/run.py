@@ -1,0 +1,157 @@
+"""The stages of one run: prepare the run directory, train, checkpoint, evaluate, record."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+from rich.console import Console
+
+from ..agents.expert import ScriptedExpert
+from ..agents.sb3 import build_model, load_checkpoint, make_vec_env, policy_function, save_checkpoint
+from ..env.fast_env import FastEnv
+from ..log import RunRecorder
+from ..model.compiler import compile_task
+from ..spec import load_spec
+from ..spec.models import TaskSpec
+from .evaluate import evaluate
+from .monitor import TrainingMonitor
+from .rundir import latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
+
+
+class RunInterrupted(Exception):
+    """Training was stopped by the user; the run can be resumed."""
+
+    def __init__(self, run: Path, timesteps: int):
+        super().__init__(f"interrupted at {timesteps} timesteps")
+        self.run, self.timesteps = run, timesteps
+
+
+def start_run(spec_path, overrides=(), root="runs", console: Console | None = None, progress: bool = True) -> Path:
+    """Train, evaluate and record a new run of a spec file; return its directory."""
+    spec = load_spec(spec_path, overrides)
+    task = compile_task(spec)
+    run = new_run_dir(Path(root), spec)
+    write_spec(run, spec, task.xml)
+    write_meta(run, spec, str(spec_path), {"status": "training", "overrides": list(overrides)})
+    return _train_and_evaluate(run, spec, None, console or Console(), progress)
+
+
+def resume_run(run: Path, console: Console | None = None, progress: bool = True) -> Path:
+    """Continue a run from its newest checkpoint to its budget, then evaluate and record."""
+    run = Path(run)
+    spec = load_spec(run / "spec.yaml")
+    ckpt = latest_checkpoint(run)
+    if ckpt is None:
+        raise FileNotFoundError(f"{run} has no checkpoint to resume from")
+    return _train_and_evaluate(run, spec, ckpt, console or Console(), progress)
+
+
+def _open_recorder(run: Path, spec: TaskSpec, resuming: bool) -> RunRecorder:
+    """The run's recording; a resumed run keeps the old file aside and re-logs the curves so far."""
+    path = run / "recording.rrd"
+    if resuming and path.exists():
+        k = len(list(run.glob("recording.part*.rrd"))) + 1
+        path.rename(run / f"recording.part{k}.rrd")
+    recorder = RunRecorder(path, recording_id=run.name, run_name=f"{spec.name} {run.name}")
+    recorder.log_scene(compile_task(spec))
+    recorder.send_blueprint(min(spec.evaluate.record_episodes, spec.evaluate.episodes))
+    if resuming:
+        history = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines() if line.strip()] \
+            if (run / "metrics.jsonl").exists() else []
+        if history:
+            import numpy as np
+
+            keys = sorted({k for row in history for k in row} - {"timesteps"})
+            recorder.log_training_columns(np.array([r["timesteps"] for r in history]),
+                                          {k: np.array([r.get(k, np.nan) for r in history], float) for k in keys})
+    return recorder
+
+
+def _train_and_evaluate(run: Path, spec: TaskSpec, ckpt: Path | None, console: Console, progress: bool) -> Path:
+    """Train (from a checkpoint if given), save, evaluate agent and expert, write eval.json and the recording."""
+    venv = make_vec_env(spec, spec.train.n_envs, spec.train.seed)
+    model = build_model(spec, venv)
+    before = load_checkpoint(ckpt, model, venv) if ckpt else {}
+    recorder = _open_recorder(run, spec, resuming=ckpt is not None)
+    try:
+        monitor = TrainingMonitor(run, list(spec.reward.features), spec.train.timesteps, spec.train.log_every,
+                                  spec.train.checkpoint_every, recorder, progress)
+        monitor.episodes = before.get("episodes", 0)
+        seconds = before.get("train_seconds", 0.0)
+        remaining = spec.train.timesteps - model.num_timesteps
+        t0 = time.perf_counter()
+        try:
+            if remaining > 0:
+                model.learn(remaining, callback=monitor, reset_num_timesteps=False)
+        except KeyboardInterrupt:
+            monitor.progress.stop()
+            seconds += time.perf_counter() - t0
+            save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv,
+                            {"episodes": monitor.episodes, "train_seconds": seconds})
+            update_meta(run, status="interrupted", trained_timesteps=int(model.num_timesteps), train_seconds=seconds)
+            raise RunInterrupted(run, int(model.num_timesteps)) from None
+        seconds += time.perf_counter() - t0
+        state = {"episodes": monitor.episodes, "train_seconds": seconds}
+        save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state)
+        save_checkpoint(run / "final", model, venv, state)
+        update_meta(run, status="evaluating", trained_timesteps=int(model.num_timesteps), train_seconds=seconds,
+                    train_fps=model.num_timesteps / max(seconds, 1e-9))
+        results = evaluate_run(spec, policy_function(model, venv), recorder, console)
+        (run / "eval.json").write_text(json.dumps(results, indent=2))
+        recorder.log_summary(results["agent"])
+        update_meta(run, status="done", eval_seconds=results["eval_seconds"])
+    finally:
+        recorder.close()
+    return run
+
+
+def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: Console | None) -> dict:
+    """Evaluate a policy (and the scripted expert, if the spec asks) on the spec's evaluation seeds."""
+    ev = spec.evaluate
+    seeds = [ev.seed + i for i in range(ev.episodes)]
+    env = FastEnv(spec, width=ev.image_size[0], height=ev.image_size[1])
+    task = env.task
+    t0 = time.perf_counter()
+
+    def log(i, ep):
+        if recorder is not None and i < ev.record_episodes:
+            recorder.log_episode(i, ep, task, spec.scope.fov_deg, ev.image_size)
+
+    agent, _ = evaluate(env, policy, seeds, ev.image_every, ev.record_episodes, on_episode=log)
+    out = {"agent": agent, "seeds": seeds}
+    if ev.expert:
+        expert = ScriptedExpert(env)
+        out["expert"], _ = evaluate(env, expert.act, seeds, on_reset=expert.reset)
+    out["eval_seconds"] = time.perf_counter() - t0
+    env.close()
+    return out
+
+
+def evaluate_saved(run: Path, episodes: int | None = None) -> dict:
+    """Re-evaluate a saved run's final (or newest) policy without touching its recording."""
+    run = Path(run)
+    spec = load_spec(run / "spec.yaml")
+    if episodes:
+        spec = spec.model_copy(update={"evaluate": spec.evaluate.model_copy(update={"episodes": episodes})})
+    weights = run / "final" if (run / "final" / "weights.pt").exists() else latest_checkpoint(run)
+    if weights is None:
+        raise FileNotFoundError(f"{run} has no saved policy")
+    venv = make_vec_env(spec, 1, spec.train.seed)
+    model = build_model(spec, venv)
+    load_checkpoint(weights, model, venv)
+    venv.training = False
+    return evaluate_run(spec, policy_function(model, venv), None, None)
+
+
+def evaluate_expert(spec_path, overrides=(), episodes: int | None = None) -> dict:
+    """Evaluate the scripted expert alone on a spec's evaluation seeds."""
+    spec = load_spec(spec_path, overrides)
+    ev = spec.evaluate
+    seeds = [ev.seed + i for i in range(episodes or ev.episodes)]
+    env = FastEnv(spec)
+    expert = ScriptedExpert(env)
+    t0 = time.perf_counter()
+    summary, _ = evaluate(env, expert.act, seeds, on_reset=expert.reset)
+    return {"expert": summary, "seeds": seeds, "eval_seconds": time.perf_counter() - t0}

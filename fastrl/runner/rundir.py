@@ -1,0 +1,121 @@
+"""The run directory: naming, resolved spec, compiled MJCF, metadata, checkpoints, listing."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import platform
+import subprocess
+import sys
+from datetime import datetime, timezone
+from importlib import metadata
+from pathlib import Path
+
+import yaml
+
+from ..spec.models import TaskSpec
+
+PACKAGES = ("fastrl", "mujoco", "gymnasium", "stable-baselines3", "torch", "numpy", "pydantic", "rerun-sdk")
+
+
+def spec_hash(spec: TaskSpec) -> str:
+    """SHA-256 of the resolved spec's canonical JSON (first 16 hex digits)."""
+    text = json.dumps(spec.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def new_run_dir(root: Path, spec: TaskSpec) -> Path:
+    """runs/<spec name>/<UTC timestamp>-<algo>-s<seed>/, made unique if it exists."""
+    stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    base = Path(root) / spec.name / f"{stamp}-{spec.train.algo.lower()}-s{spec.train.seed}"
+    path, k = base, 1
+    while path.exists():
+        k += 1
+        path = base.with_name(f"{base.name}-{k}")
+    path.mkdir(parents=True)
+    return path
+
+
+def write_spec(run: Path, spec: TaskSpec, xml: str) -> None:
+    """Write the resolved spec (YAML) and the compiled MJCF."""
+    text = yaml.safe_dump(spec.model_dump(mode="json"), sort_keys=False, default_flow_style=None, width=100)
+    (run / "spec.yaml").write_text(f"# resolved spec of this run (hash {spec_hash(spec)})\n{text}")
+    (run / "model.xml").write_text(xml)
+
+
+def git_commit() -> str | None:
+    """The source tree's git commit, with '-dirty' if it has uncommitted changes, or None."""
+    root = Path(__file__).resolve().parents[2]
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, timeout=5)
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root,
+                               capture_output=True, text=True, timeout=5)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    if head.returncode != 0:
+        return None
+    return head.stdout.strip() + ("-dirty" if dirty.stdout.strip() else "")
+
+
+def write_meta(run: Path, spec: TaskSpec, source: str, extra: dict | None = None) -> dict:
+    """meta.json: versions, git commit, command line, spec hash and source, machine."""
+    versions = {}
+    for pkg in PACKAGES:
+        try:
+            versions[pkg] = metadata.version(pkg)
+        except metadata.PackageNotFoundError:
+            versions[pkg] = None
+    meta = {
+        "spec_name": spec.name, "spec_hash": spec_hash(spec), "spec_source": source,
+        "algo": spec.train.algo, "seed": spec.train.seed, "timesteps": spec.train.timesteps,
+        "command": sys.argv, "git_commit": git_commit(), "python": sys.version.split()[0],
+        "versions": versions, "machine": {"platform": platform.platform(), "processor": platform.processor(),
+                                          "cpus": _cpu_count()},
+        "started_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"), **(extra or {}),
+    }
+    (run / "meta.json").write_text(json.dumps(meta, indent=2))
+    return meta
+
+
+def update_meta(run: Path, **fields) -> None:
+    """Merge fields into meta.json."""
+    path = run / "meta.json"
+    meta = json.loads(path.read_text()) if path.exists() else {}
+    meta.update(fields)
+    path.write_text(json.dumps(meta, indent=2))
+
+
+def latest_checkpoint(run: Path) -> Path | None:
+    """The checkpoint with the most timesteps, or None."""
+    found = [p for p in (run / "checkpoints").glob("*") if (p / "state.json").exists() and (p / "weights.pt").exists()]
+    return max(found, key=lambda p: json.loads((p / "state.json").read_text())["timesteps"], default=None)
+
+
+def list_runs(root: Path) -> list[dict]:
+    """Every run under root with its headline figures, newest first."""
+    rows = []
+    for meta_path in Path(root).glob("*/*/meta.json"):
+        run = meta_path.parent
+        try:
+            meta = json.loads(meta_path.read_text())
+        except (OSError, json.JSONDecodeError):
+            continue
+        ev = {}
+        if (run / "eval.json").exists():
+            try:
+                ev = json.loads((run / "eval.json").read_text()).get("agent", {})
+            except (OSError, json.JSONDecodeError):
+                ev = {}
+        rows.append({"run": str(run), "spec": meta.get("spec_name"), "algo": meta.get("algo"),
+                     "seed": meta.get("seed"), "status": meta.get("status", "?"),
+                     "timesteps": meta.get("trained_timesteps"), "wall_s": meta.get("train_seconds"),
+                     "success": ev.get("success_rate"), "subtasks": ev.get("subtasks_completed"),
+                     "started": meta.get("started_utc", "")})
+    return sorted(rows, key=lambda r: r["started"], reverse=True)
+
+
+def _cpu_count() -> int:
+    """Number of CPUs."""
+    import os
+
+    return os.cpu_count() or 1
