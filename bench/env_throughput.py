@@ -172,7 +172,7 @@ def bench_task(name: str, seconds: float, rounds: int, seed: int, log) -> dict:
     env = fastrl.make(str(ROOT / "specs" / f"{name}.yaml"))
     model, substeps = env.unwrapped.model, int(env.unwrapped.substeps)
     actions = draw_actions(env.action_space, seed)
-    ctrls, states, warm_us_per_step, ncon = record(env, actions, seed)
+    ctrls, states, _, ncon = record(env, actions, seed)
     gym_id = GYM_IDS.get(name)
     genv = gymnasium.make(gym_id) if gym_id in gymnasium.registry else None
     data = mujoco.MjData(model)
@@ -272,7 +272,7 @@ def print_report(console, info: dict, results: dict, elapsed: float) -> None:
                   f"MUJOCO_GL={info['mujoco_gl']}")
     names = list(results)
     console.print("Single env, state observation, the spec's action mode; times are medians "
-                  "over rounds, [min | max] in brackets.")
+                  "over rounds, \\[min | max] in brackets.")
     table = Table()
     table.add_column("metric", style="bold")
     for name in names:

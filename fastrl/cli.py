@@ -185,7 +185,7 @@ def run(
         raise typer.Exit(code=2)
     try:
         if resume is not None:
-            run_dir = resume_run(resume, out, progress)
+            run_dir = resume_run(resume, out, progress, timesteps)
         else:
             load_or_exit(spec, overrides)
             run_dir = start_run(spec, overrides, runs, out, progress)
@@ -268,22 +268,26 @@ def view(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR", show_default
 
 
 @app.command(name="runs")
-def runs_(root: RunsOpt = Path("runs")) -> None:
+def runs_(root: RunsOpt = Path("runs"),
+          as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False) -> None:
     """List runs with their headline figures, newest first."""
     from rich.table import Table
 
     from .runner.rundir import list_runs
 
     rows = list_runs(root)
+    if as_json:
+        typer.echo(json.dumps(rows, indent=2))
+        return
     if not rows:
         out.print(f"no runs under {escape(str(root))}")
         return
-    table = Table()
+    table = Table(title=f"runs under {root}")
     for col in ("run", "spec", "algo", "seed", "status", "timesteps", "wall", "success", "subtasks"):
-        table.add_column(col)
+        table.add_column(col, overflow="fold")
     for r in rows:
         pct = lambda v: "-" if v is None else f"{v:.0%}"  # noqa: E731
-        table.add_row(r["run"], r["spec"] or "?", r["algo"] or "?", str(r["seed"]), r["status"],
+        table.add_row(str(Path(r["run"]).relative_to(root)), r["spec"] or "?", r["algo"] or "?", str(r["seed"]), r["status"],
                       str(r["timesteps"] or "-"), "-" if r["wall_s"] is None else f"{r['wall_s']:.0f}s",
                       pct(r["success"]), pct(r["subtasks"]))
     out.print(table)

@@ -32,12 +32,13 @@ def log_episode(rec: rr.RecordingStream, ep: EpisodeRecord, task: CompiledTask, 
 
 
 def _log_scope(rec, world: str, ep: EpisodeRecord, index: list, diameter: float) -> None:
-    """The shaft as a 2-point strip per step and the tip as a point."""
+    """The shaft as a 2-point strip per step and the tip as a point (style in the columns: one call each)."""
+    n = len(ep.time)
     shaft = np.stack([np.asarray(ep.tip_pos, float), np.asarray(ep.shaft_end, float)], axis=1)
-    rec.log(f"{world}/shaft", rr.LineStrips3D.from_fields(radii=[0.5 * diameter], colors=[SHAFT]), static=True)
-    rec.send_columns(f"{world}/shaft", indexes=index, columns=rr.LineStrips3D.columns(strips=shaft))
-    rec.log(f"{world}/tip", rr.Points3D.from_fields(radii=[0.6 * diameter], colors=[TIP]), static=True)
-    rec.send_columns(f"{world}/tip", indexes=index, columns=rr.Points3D.columns(positions=ep.tip_pos))
+    rec.send_columns(f"{world}/shaft", indexes=index, columns=rr.LineStrips3D.columns(
+        strips=shaft, radii=np.full(n, 0.5 * diameter), colors=np.tile(SHAFT, (n, 1))))
+    rec.send_columns(f"{world}/tip", indexes=index, columns=rr.Points3D.columns(
+        positions=ep.tip_pos, radii=np.full(n, 0.6 * diameter), colors=np.tile(TIP, (n, 1))))
 
 
 def _log_camera(rec, world: str, ep: EpisodeRecord, index: list, fov_deg: float, image_size) -> None:
@@ -61,10 +62,9 @@ def _log_camera(rec, world: str, ep: EpisodeRecord, index: list, fov_deg: float,
     channels = frames.shape[3] if frames.ndim == 4 else 1
     model = {1: "L", 3: "RGB", 4: "RGBA"}[channels]
     fmt = rr.components.ImageFormat(width=fw, height=fh, color_model=model, channel_datatype="U8")
-    rec.log(image, rr.Image.from_fields(format=fmt), static=True)
     at = np.asarray(keys)
     img_index = [rr.TimeColumn("step", sequence=at), rr.TimeColumn("sim_time", duration=np.asarray(ep.time)[at])]
-    rec.send_columns(image, indexes=img_index, columns=rr.Image.columns(buffer=frames.reshape(n, -1)))
+    rec.send_columns(image, indexes=img_index, columns=rr.Image.columns(buffer=frames.reshape(n, -1), format=[fmt] * n))
 
 
 def _log_path(rec, world: str, ep: EpisodeRecord) -> None:
@@ -73,8 +73,9 @@ def _log_path(rec, world: str, ep: EpisodeRecord) -> None:
     if len(pos) < 2:
         return
     segs = np.stack([pos[:-1], pos[1:]], axis=1)
-    colors = viridis(np.asarray(ep.reward, float)[1:])
-    rec.log(f"{world}/trajectory", rr.LineStrips3D(segs, radii=0.0005, colors=colors), static=True)
+    reward = np.asarray(ep.reward, float)[1:]
+    lo, hi = np.nanpercentile(reward, [5, 90])  # a few large bonuses would wash the ramp out
+    rec.log(f"{world}/trajectory", rr.LineStrips3D(segs, radii=0.0008, colors=viridis(reward, lo, hi)), static=True)
 
 
 def _log_cue(rec, world: str, ep: EpisodeRecord, index: list, task: CompiledTask) -> None:
@@ -83,17 +84,16 @@ def _log_cue(rec, world: str, ep: EpisodeRecord, index: list, task: CompiledTask
     if not len(pos):
         return
     k = np.minimum(np.asarray(ep.subtask, int), len(pos) - 1)
+    radius = 1.5 * task.targets.size
+    lifted = pos + radius * task.targets.fwd  # the whole ball above its surface
     colors = np.where(np.asarray(ep.green, bool)[:, None], GREEN, ORANGE)
-    rec.log(f"{world}/avatar", rr.Points3D.from_fields(radii=[1.4 * task.targets.size]), static=True)
-    rec.send_columns(f"{world}/avatar", indexes=index,
-                     columns=rr.Points3D.columns(positions=pos[k], colors=colors))
+    rec.send_columns(f"{world}/avatar", indexes=index, columns=rr.Points3D.columns(
+        positions=lifted[k], colors=colors, radii=np.full(len(k), radius)))
 
 
 def _log_scalars(rec, metrics: str, ep: EpisodeRecord, index: list) -> None:
-    """Reward, every reward feature and the subtask count as time series."""
+    """Reward, every reward feature and the subtask count as time series (the legend shows the leaf names)."""
     series = {"reward": ep.reward, "subtask": ep.subtask}
     series.update({f"features/{name}": v for name, v in ep.features.items()})
     for name, values in series.items():
-        path = f"{metrics}/{name}"
-        rec.log(path, rr.SeriesLines(names=name.rsplit("/", 1)[-1], widths=1.5), static=True)
-        rec.send_columns(path, indexes=index, columns=rr.Scalars.columns(scalars=np.asarray(values, float)))
+        rec.send_columns(f"{metrics}/{name}", indexes=index, columns=rr.Scalars.columns(scalars=np.asarray(values, float)))

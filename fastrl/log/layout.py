@@ -10,7 +10,7 @@ def episode_name(index: int) -> str:
     return f"ep_{index:02d}"
 
 
-def run_blueprint(n_episodes: int, focus: int = 0, eye: tuple | None = None) -> rrb.Blueprint:
+def run_blueprint(n_episodes: int, focus: int = 0, eye: tuple | None = None, timeline: str = "step") -> rrb.Blueprint:
     """3D view of the scene and one episode, its endoscope image and features, training curves, summary."""
     ep = episode_name(focus)
     world = ["+ /world", "+ /world/scene/**"]
@@ -35,5 +35,5 @@ def run_blueprint(n_episodes: int, focus: int = 0, eye: tuple | None = None) -> 
     return rrb.Blueprint(
         rrb.Horizontal(left, right, column_shares=[3, 2]),
         rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),
-        rrb.TimePanel(state="collapsed", timeline="step"),
+        rrb.TimePanel(state="collapsed", timeline=timeline),
         auto_layout=False, auto_views=False)

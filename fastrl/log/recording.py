@@ -38,7 +38,7 @@ class RunRecorder:
         r = float(np.linalg.norm(p)) or 0.12
         side = np.array([p[1], -p[0], 0.0]) / (np.hypot(p[0], p[1]) or 1.0)
         outward = np.array([p[0], p[1], 0.0]) / (np.hypot(p[0], p[1]) or 1.0)
-        position = 2.4 * r * (0.6 * outward + 0.8 * side) + np.array([0.0, 0.0, 2.2 * r])
+        position = 2.1 * r * (0.6 * outward + 0.8 * side) + np.array([0.0, 0.0, 2.2 * r])
         self.eye = (tuple(position), (0.0, 0.0, 0.1 * r))
 
     def log_episode(self, index: int, ep: EpisodeRecord, task: CompiledTask, fov_deg: float,

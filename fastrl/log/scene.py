@@ -11,7 +11,7 @@ from ..model.targets import LINE_RGBA
 from ..spec import geometry as geo
 from .shapes import disk, hemisphere, rgba, ring
 
-AVATAR_RGBA = (1.0, 0.6, 0.1)
+AVATAR_RGBA = (0.8, 0.62, 0.42)  # muted: the current avatar is drawn per episode in cue colours
 SHELL_ALPHA = 0.35
 
 
@@ -55,7 +55,7 @@ def _log_targets(rec: rr.RecordingStream, base: str, task: CompiledTask) -> None
     n = len(t)
     if n:
         rec.log(f"{base}/avatars", rr.Points3D(
-            t.pos, radii=t.size, colors=rgba(AVATAR_RGBA, 1.0), labels=[str(i) for i in range(n)],
+            t.pos, radii=0.7 * t.size, colors=rgba(AVATAR_RGBA, 1.0), labels=[str(i) for i in range(n)],
             show_labels=_spread(t.pos) > 0.02), static=True)
         rec.log(f"{base}/avatars/up", rr.Arrows3D(
             origins=t.pos, vectors=2.0 * t.size * t.up, radii=0.15 * t.size, colors=rgba((0.1, 0.1, 0.1))),

@@ -59,15 +59,10 @@ def ring(centre: np.ndarray, normal: np.ndarray, radius: float, n: int = 32) -> 
     return np.asarray(centre, float) + radius * (np.cos(t) * u + np.sin(t) * v)
 
 
-def viridis(values: np.ndarray, lo: float | None = None, hi: float | None = None) -> np.ndarray:
-    """RGBA uint8 colours of values on a viridis ramp between lo and hi (default: 5th-95th percentile)."""
-    x = np.asarray(values, float)
-    if x.size == 0:
-        return np.zeros((0, 4), np.uint8)
-    finite = x[np.isfinite(x)]
-    lo = float(np.percentile(finite, 5)) if lo is None and finite.size else (lo or 0.0)
-    hi = float(np.percentile(finite, 95)) if hi is None and finite.size else (hi if hi is not None else 1.0)
-    s = np.clip((np.nan_to_num(x, nan=lo) - lo) / max(hi - lo, 1e-12), 0.0, 1.0) * (len(_VIRIDIS) - 1)
+def viridis(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """RGBA uint8 colours of values on a viridis ramp from lo (purple) to hi (yellow); NaN maps to lo."""
+    x = np.nan_to_num(np.asarray(values, float).ravel(), nan=lo)
+    s = np.clip((x - lo) / max(hi - lo, 1e-12), 0.0, 1.0) * (len(_VIRIDIS) - 1)
     k = np.minimum(s.astype(int), len(_VIRIDIS) - 2)
     f = (s - k)[:, None]
     rgb = (1 - f) * _VIRIDIS[k] + f * _VIRIDIS[k + 1]

@@ -38,10 +38,14 @@ def start_run(spec_path, overrides=(), root="runs", console: Console | None = No
     return _train_and_evaluate(run, spec, None, console or Console(), progress)
 
 
-def resume_run(run: Path, console: Console | None = None, progress: bool = True) -> Path:
-    """Continue a run from its newest checkpoint to its budget, then evaluate and record."""
+def resume_run(run: Path, console: Console | None = None, progress: bool = True, timesteps: int | None = None) -> Path:
+    """Continue a run from its newest checkpoint to its budget (or a new one), then evaluate and record."""
     run = Path(run)
-    spec = load_spec(run / "spec.yaml")
+    if not (run / "spec.yaml").exists():
+        raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
+    spec = load_spec(run / "spec.yaml", [f"train.timesteps={timesteps}"] if timesteps else [])
+    if timesteps:
+        write_spec(run, spec, compile_task(spec).xml)
     ckpt = latest_checkpoint(run)
     if ckpt is None:
         raise FileNotFoundError(f"{run} has no checkpoint to resume from")
