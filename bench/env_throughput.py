@@ -301,7 +301,7 @@ def print_report(console, info: dict, results: dict, elapsed: float) -> None:
     row("physics µs/env step", lambda r: spread(r["physics"]))
     row("  physics µs/substep", lambda r: f"{r['physics']['us_per_substep']:.1f}")
     row("  contacts per step (mean)", lambda r: f"{r['mean_contacts']:.2f}")
-    row("env overhead µs/step", lambda r: f"{r['overhead_us']:.0f} (min-min {r['overhead_min_us']:.0f})")
+    row("env overhead µs/step", lambda r: f"{r['overhead_us']:.0f} (mins: {r['overhead_min_us']:.0f})")
     row("overhead / physics", lambda r: f"{r['overhead_ratio']:.2f}")
     row("gym.make env steps/s", lambda r: f"{r['gym']['steps_per_s']:,.0f}")
     row("gym.make µs/step", lambda r: spread(r["gym"]))
@@ -317,6 +317,15 @@ def print_report(console, info: dict, results: dict, elapsed: float) -> None:
     console.print(table)
     console.print(f"Targets: ≥ {TARGET_STEPS_PER_S:,.0f} env steps/s per task (single env, median), "
                   "env overhead ≤ physics time. Reported, not asserted.")
+    for name, r in results.items():
+        if r["physics"]["steps_per_s"] < TARGET_STEPS_PER_S:
+            console.print(f"  {name}: physics alone allows {r['physics']['steps_per_s']:,.0f} "
+                          f"steps/s < {TARGET_STEPS_PER_S:,.0f}: the model must get cheaper.")
+    loads = [float(x) for x in info["loadavg"][:1] + info.get("loadavg_end", [])[:1]]
+    busy = bool(loads) and max(loads) > (info["cores_usable"] or info["cores"] or 1) - 0.5
+    console.print(f"Load average {' '.join(info['loadavg'])} at the start, "
+                  f"{' '.join(info.get('loadavg_end', []))} at the end"
+                  + (": other jobs shared the CPU, figures are pessimistic." if busy else "."))
     console.print(f"[dim]Overhead = env µs/step - physics µs/step (medians); physics replays the "
                   f"env's own ctrl trajectory. Total time {elapsed:.0f} s.[/dim]")
 
@@ -342,18 +351,19 @@ def profile_task(name: str, seconds: float, seed: int, top: int, console) -> dic
                      "tottime_us_per_step": 1e6 * tottime / n, "cumtime_us_per_step": 1e6 * cumtime / n})
     rows.sort(key=lambda r: -r["tottime_us_per_step"])
     total = sum(r["tottime_us_per_step"] for r in rows)
-    console.print(f"[bold]cProfile of {name}.step[/] over {n} steps: {total:.0f} µs/step profiled "
-                  "(cProfile inflates Python call costs; compare rows, not totals)")
+    console.print(f"[bold]cProfile of {name}.step[/], {n} steps: {total:.0f} µs/step under "
+                  "the profiler (it inflates Python calls)")
+    console.print("   self µs     cum µs  calls/step  function")
     for r in rows[:top]:
-        console.print(f"{r['tottime_us_per_step']:8.1f} µs  {r['cumtime_us_per_step']:8.1f} cum  "
-                      f"{r['calls_per_step']:6.1f} calls  {r['function']}")
+        console.print(f"{r['tottime_us_per_step']:10.1f} {r['cumtime_us_per_step']:10.1f} "
+                      f"{r['calls_per_step']:11.1f}  {r['function']}")
     return {"task": name, "steps": n, "total_us_per_step": total, "top": rows[:top]}
 
 
 # ---- main ----------------------------------------------------------------------------------
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--seconds", type=float, default=1.5, help="seconds per measurement per round")
+    p.add_argument("--seconds", type=float, default=1.2, help="seconds per measurement per round")
     p.add_argument("--rounds", type=int, default=5, help="interleaved rounds (median and min reported)")
     p.add_argument("--tasks", default=",".join(TASKS), help="comma-separated spec names in specs/")
     p.add_argument("--seed", type=int, default=0, help="seed of the action sequence and resets")
@@ -383,6 +393,7 @@ def main(argv: list[str] | None = None) -> int:
     for name in tasks:
         results[name] = bench_task(name, args.seconds, args.rounds, args.seed, console.print)
     elapsed = time.perf_counter() - t0
+    info["loadavg_end"] = machine_info()["loadavg"]
     print_report(console, info, results, elapsed)
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)

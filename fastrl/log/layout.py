@@ -4,36 +4,74 @@ from __future__ import annotations
 
 import rerun.blueprint as rrb
 
+BACKGROUND = (40, 42, 48)
+
 
 def episode_name(index: int) -> str:
     """Entity name of an evaluation episode."""
     return f"ep_{index:02d}"
 
 
-def run_blueprint(n_episodes: int, focus: int = 0, eye: tuple | None = None, timeline: str = "step") -> rrb.Blueprint:
-    """3D view of the scene and one episode, its endoscope image and features, training curves, summary."""
-    ep = episode_name(focus)
-    world = ["+ /world", "+ /world/scene/**"]
-    if n_episodes > 0:
-        world.append(f"+ /world/eval/{ep}/**")
+def run_blueprint(
+    n_episodes: int, focus: int = 0, eye: tuple | None = None, timeline: str | None = None
+) -> rrb.Blueprint:
+    """3D scene + episode `focus`, its endoscope image and reward features, training, summary."""
+    # Other episodes stay in the recording, hidden from the 3D view. Time series views plot
+    # against the time panel's timeline (rerun 0.41 has no per-view timeline): `step` shows
+    # the episode, `timesteps` the training curves.
     eye_controls = None
     if eye is not None:
-        position, target = eye
-        eye_controls = rrb.EyeControls3D(position=position, look_target=target, eye_up=(0.0, 0.0, 1.0))
-    scene = rrb.Spatial3DView(origin="/world", contents=world, name=f"scene + {ep}" if n_episodes else "scene",
-                              eye_controls=eye_controls, background=(40, 42, 48))
-    image = rrb.Spatial2DView(origin=f"/world/eval/{ep}/camera/image", name=f"endoscope {ep}")
-    reward = rrb.TimeSeriesView(origin=f"/metrics/eval/{ep}", name=f"reward {ep} (timeline: step)",
-                                contents=[f"+ /metrics/eval/{ep}/reward"], plot_legend=rrb.PlotLegend(visible=False))
-    features = rrb.TimeSeriesView(origin=f"/metrics/eval/{ep}/features", name=f"reward features {ep}",
-                                  plot_legend=rrb.Corner2D.LeftTop)
-    training = rrb.TimeSeriesView(origin="/metrics/train", name="training (select timeline: timesteps)",
-                                  plot_legend=rrb.Corner2D.LeftTop)
+        eye_controls = rrb.EyeControls3D(
+            position=eye[0], look_target=eye[1], eye_up=(0.0, 0.0, 1.0)
+        )
+    training = rrb.TimeSeriesView(
+        origin="/metrics/train",
+        name="training (timeline: timesteps)",
+        plot_legend=rrb.Corner2D.LeftTop,
+    )
     summary = rrb.TextDocumentView(origin="/summary", name="summary")
-    left = rrb.Vertical(scene, rrb.Horizontal(image, summary, column_shares=[1, 1]), row_shares=[2, 1])
+    if n_episodes <= 0:
+        scene = rrb.Spatial3DView(
+            origin="/world",
+            contents=["+ /world", "+ /world/scene/**"],
+            name="scene",
+            eye_controls=eye_controls,
+            background=BACKGROUND,
+        )
+        root = rrb.Horizontal(scene, rrb.Vertical(training, summary), column_shares=[3, 2])
+        return _blueprint(root, timeline or "timesteps")
+    ep = episode_name(focus)
+    scene = rrb.Spatial3DView(
+        origin="/world",
+        contents=["+ /world", "+ /world/scene/**", f"+ /world/eval/{ep}/**"],
+        name=f"scene + {ep}",
+        eye_controls=eye_controls,
+        background=BACKGROUND,
+    )
+    image = rrb.Spatial2DView(origin=f"/world/eval/{ep}/camera/image", name=f"endoscope {ep}")
+    reward = rrb.TimeSeriesView(
+        origin=f"/metrics/eval/{ep}",
+        contents=[f"+ /metrics/eval/{ep}/reward"],
+        name=f"reward {ep} (timeline: step)",
+        plot_legend=rrb.PlotLegend(visible=False),
+    )
+    features = rrb.TimeSeriesView(
+        origin=f"/metrics/eval/{ep}/features",
+        name=f"reward features {ep}",
+        plot_legend=rrb.Corner2D.LeftTop,
+    )
+    left = rrb.Vertical(scene, rrb.Horizontal(image, summary), row_shares=[2, 1])
     right = rrb.Vertical(reward, features, training, row_shares=[3, 6, 4])
+    return _blueprint(rrb.Horizontal(left, right, column_shares=[3, 2]), timeline or "step")
+
+
+def _blueprint(root, timeline: str) -> rrb.Blueprint:
+    """The layout with side panels collapsed and the time panel on `timeline`."""
     return rrb.Blueprint(
-        rrb.Horizontal(left, right, column_shares=[3, 2]),
-        rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),
+        root,
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
         rrb.TimePanel(state="collapsed", timeline=timeline),
-        auto_layout=False, auto_views=False)
+        auto_layout=False,
+        auto_views=False,
+    )

@@ -31,12 +31,14 @@ class TrainingCurves:
         return path
 
     def row(self, timesteps: int, metrics: dict[str, float]) -> None:
-        """One value per metric at `timesteps`; None and NaN are skipped."""
-        index = [rr.TimeColumn("timesteps", sequence=[int(timesteps)])]
-        for name, value in metrics.items():
-            if _finite(value):
-                self.rec.send_columns(self._style(name), indexes=index,
-                                      columns=rr.Scalars.columns(scalars=[float(value)]))
+        """One value per metric at `timesteps`, through the batcher; None/NaN skipped."""
+        self.rec.set_time("timesteps", sequence=int(timesteps))
+        try:
+            for name, value in metrics.items():
+                if _finite(value):
+                    self.rec.log(self._style(name), rr.Scalars(float(value)))
+        finally:
+            self.rec.disable_timeline("timesteps")
 
     def columns(self, timesteps: np.ndarray, metrics: dict[str, np.ndarray]) -> None:
         """Many rows per metric at once; NaN entries are dropped per metric."""
@@ -47,12 +49,17 @@ class TrainingCurves:
                 raise ValueError(f"metric '{name}' has {len(v)} values for {len(ts)} timesteps")
             keep = np.isfinite(v)
             if keep.any():
-                self.rec.send_columns(self._style(name), indexes=[rr.TimeColumn("timesteps", sequence=ts[keep])],
-                                      columns=rr.Scalars.columns(scalars=v[keep]))
+                self.rec.send_columns(
+                    self._style(name),
+                    indexes=[rr.TimeColumn("timesteps", sequence=ts[keep])],
+                    columns=rr.Scalars.columns(scalars=v[keep]),
+                )
 
 
 def _fmt(x) -> str:
-    """A number in a short readable form."""
+    """A number in a short readable form (strings pass through, None shows as a dash)."""
+    if isinstance(x, str):
+        return x
     if isinstance(x, (bool, np.bool_)):
         return "yes" if x else "no"
     if isinstance(x, (int, np.integer)):
@@ -63,22 +70,47 @@ def _fmt(x) -> str:
 def summary_markdown(summary: dict, title: str = "Evaluation") -> str:
     """Markdown of the headline figures of `fastrl.runner.evaluate.summarize` output."""
     g = summary.get
-    lines = [f"## {title}", "", "| figure | value |", "|---|---|",
-             f"| episodes | {_fmt(g('episodes', 0))} |",
-             f"| success rate | {_fmt(100 * g('success_rate', math.nan))} % |",
-             f"| subtasks completed | {_fmt(100 * g('subtasks_completed', math.nan))} % |",
-             f"| return | {_fmt(g('return_mean', math.nan))} ± {_fmt(g('return_std', math.nan))} |",
-             f"| episode time | {_fmt(g('episode_time_mean', math.nan))} s |",
-             f"| path length | {_fmt(100 * g('path_length_mean', math.nan))} cm |"]
+    lines = [
+        f"## {title}",
+        "",
+        "| figure | value |",
+        "|---|---|",
+        f"| episodes | {_fmt(g('episodes', 0))} |",
+        f"| success rate | {_fmt(100 * g('success_rate', math.nan))} % |",
+        f"| subtasks completed | {_fmt(100 * g('subtasks_completed', math.nan))} % |",
+        f"| return | {_fmt(g('return_mean', math.nan))} ± {_fmt(g('return_std', math.nan))} |",
+        f"| episode time | {_fmt(g('episode_time_mean', math.nan))} s |",
+        f"| path length | {_fmt(100 * g('path_length_mean', math.nan))} cm |",
+    ]
     feats = g("features_mean") or {}
     if feats:
-        lines += ["", "### Reward features (mean sum per episode)", "", "| feature | value |", "|---|---|"]
+        lines += [
+            "",
+            "### Reward features (mean sum per episode)",
+            "",
+            "| feature | value |",
+            "|---|---|",
+        ]
         lines += [f"| {k} | {_fmt(v)} |" for k, v in feats.items()]
     eps = g("per_episode") or []
     if eps:
-        lines += ["", "### Episodes", "", "| # | seed | success | subtasks | return | time (s) | contacts |",
-                  "|---|---|---|---|---|---|---|"]
-        lines += [f"| {i} | {_fmt(e.get('seed', ''))} | {_fmt(e.get('success', False))} | "
-                  f"{_fmt(e.get('subtasks', 0))}/{_fmt(e.get('subtasks_total', 0))} | {_fmt(e.get('return', math.nan))} | "
-                  f"{_fmt(e.get('episode_time', math.nan))} | {_fmt(e.get('contacts', 0))} |" for i, e in enumerate(eps)]
+        lines += [
+            "",
+            "### Episodes",
+            "",
+            "| # | seed | success | subtasks | return | time (s) | contacts |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for i, e in enumerate(eps):
+            done = f"{_fmt(e.get('subtasks'))}/{_fmt(e.get('subtasks_total'))}"
+            cells = [
+                i,
+                e.get("seed"),
+                e.get("success"),
+                done,
+                e.get("return"),
+                e.get("episode_time"),
+                e.get("contacts"),
+            ]
+            lines.append("| " + " | ".join(_fmt(c) for c in cells) + " |")
     return "\n".join(lines) + "\n"

@@ -25,28 +25,64 @@ def log_scene(rec: rr.RecordingStream, task: CompiledTask, root: str = "world") 
     _log_targets(rec, base, task)
 
 
+def default_eye(task: CompiledTask) -> tuple[tuple, tuple]:
+    """3D-view eye (position, look target): above the dome, beside the scope's portal."""
+    p = np.asarray(task.portal_point, float)
+    r = float(np.linalg.norm(p)) or 0.12
+    flat = np.hypot(p[0], p[1]) or 1.0
+    outward, side = np.array([p[0], p[1], 0.0]) / flat, np.array([p[1], -p[0], 0.0]) / flat
+    position = 2.1 * r * (0.6 * outward + 0.8 * side) + np.array([0.0, 0.0, 2.2 * r])
+    return tuple(position), (0.0, 0.0, 0.1 * r)
+
+
 def _log_dome(rec: rr.RecordingStream, base: str, scene, scope_portal: str) -> None:
     """Shell with holes at the portals, base plate, and a labelled ring per portal."""
     r = scene.radius
-    holes = [(geo.sphere_point(1.0, p.azimuth, p.elevation), 1.4 * p.radius / r) for p in scene.portals]
+    holes = [
+        (geo.sphere_point(1.0, p.azimuth, p.elevation), 1.4 * p.radius / r) for p in scene.portals
+    ]
     verts, normals, tris = hemisphere(r, holes)
     # Only back faces: from outside, the near wall is culled and the inside of the dome shows.
-    rec.log(f"{base}/shell", rr.Mesh3D(
-        vertex_positions=verts, vertex_normals=normals, triangle_indices=tris,
-        albedo_factor=rgba(SHELL_RGBA, SHELL_ALPHA), face_rendering=rr.components.MeshFaceRendering.Back),
-        static=True)
+    rec.log(
+        f"{base}/shell",
+        rr.Mesh3D(
+            vertex_positions=verts,
+            vertex_normals=normals,
+            triangle_indices=tris,
+            albedo_factor=rgba(SHELL_RGBA, SHELL_ALPHA),
+            face_rendering=rr.components.MeshFaceRendering.Back,
+        ),
+        static=True,
+    )
     rim = ring(np.zeros(3), np.array([0.0, 0.0, 1.0]), r + scene.thickness, n=96)
-    rec.log(f"{base}/shell/rim", rr.LineStrips3D([rim], radii=0.0008, colors=rgba(SHELL_RGBA) // 2 + 64), static=True)
+    rec.log(
+        f"{base}/shell/rim",
+        rr.LineStrips3D([rim], radii=0.0008, colors=rgba(SHELL_RGBA) // 2 + 64),
+        static=True,
+    )
     pv, pt = disk(r + 0.03, z=-0.0003)
-    rec.log(f"{base}/plate", rr.Mesh3D(vertex_positions=pv, triangle_indices=pt, albedo_factor=rgba(PLATE_RGBA),
-                                        vertex_normals=np.tile([0.0, 0.0, 1.0], (len(pv), 1))), static=True)
+    rec.log(
+        f"{base}/plate",
+        rr.Mesh3D(
+            vertex_positions=pv,
+            triangle_indices=pt,
+            albedo_factor=rgba(PLATE_RGBA),
+            vertex_normals=np.tile([0.0, 0.0, 1.0], (len(pv), 1)),
+        ),
+        static=True,
+    )
     strips, labels = [], []
     for p in scene.portals:
         point = geo.sphere_point(r, p.azimuth, p.elevation)
         strips.append(ring(point, point, 1.4 * p.radius))
         labels.append(f"{p.name} (scope)" if p.name == scope_portal else p.name)
-    rec.log(f"{base}/portals", rr.LineStrips3D(strips, radii=0.0012, colors=rgba(PORTAL_RGBA), labels=labels,
-                                               show_labels=True), static=True)
+    rec.log(
+        f"{base}/portals",
+        rr.LineStrips3D(
+            strips, radii=0.0012, colors=rgba(PORTAL_RGBA), labels=labels, show_labels=True
+        ),
+        static=True,
+    )
 
 
 def _log_targets(rec: rr.RecordingStream, base: str, task: CompiledTask) -> None:
@@ -54,19 +90,38 @@ def _log_targets(rec: rr.RecordingStream, base: str, task: CompiledTask) -> None
     t = task.targets
     n = len(t)
     if n:
-        rec.log(f"{base}/avatars", rr.Points3D(
-            t.pos, radii=0.7 * t.size, colors=rgba(AVATAR_RGBA, 1.0), labels=[str(i) for i in range(n)],
-            show_labels=_spread(t.pos) > 0.02), static=True)
-        rec.log(f"{base}/avatars/up", rr.Arrows3D(
-            origins=t.pos, vectors=2.0 * t.size * t.up, radii=0.15 * t.size, colors=rgba((0.1, 0.1, 0.1))),
-            static=True)
+        rec.log(
+            f"{base}/avatars",
+            rr.Points3D(
+                t.pos,
+                radii=0.7 * t.size,
+                colors=rgba(AVATAR_RGBA, 1.0),
+                labels=[str(i) for i in range(n)],
+                show_labels=_spread(t.pos) > 0.02,
+            ),
+            static=True,
+        )
+        rec.log(
+            f"{base}/avatars/up",
+            rr.Arrows3D(
+                origins=t.pos,
+                vectors=2.0 * t.size * t.up,
+                radii=0.15 * t.size,
+                colors=rgba((0.1, 0.1, 0.1)),
+            ),
+            static=True,
+        )
     if t.line is not None:
         width = task.spec.task.line.width if task.spec.task.line else 0.0015
-        rec.log(f"{base}/line", rr.LineStrips3D([t.line], radii=0.5 * width, colors=rgba(LINE_RGBA)), static=True)
+        rec.log(
+            f"{base}/line",
+            rr.LineStrips3D([t.line], radii=0.5 * width, colors=rgba(LINE_RGBA)),
+            static=True,
+        )
 
 
 def _spread(pos: np.ndarray) -> float:
-    """Smallest distance between two points (inf for fewer than two): labels only when they do not overlap."""
+    """Smallest distance between two of the points (inf for fewer than two)."""
     if len(pos) < 2:
         return float("inf")
     d = np.linalg.norm(pos[:, None] - pos[None], axis=-1)

@@ -5,16 +5,26 @@ from __future__ import annotations
 import numpy as np
 
 # viridis at 9 evenly spaced stops (sRGB 0..255)
-_VIRIDIS = np.array([
-    [68, 1, 84], [71, 44, 122], [59, 81, 139], [44, 113, 142], [33, 144, 141],
-    [39, 173, 129], [92, 200, 99], [170, 220, 50], [253, 231, 37]], float)
+_VIRIDIS = np.array(
+    [
+        [68, 1, 84],
+        [71, 44, 122],
+        [59, 81, 139],
+        [44, 113, 142],
+        [33, 144, 141],
+        [39, 173, 129],
+        [92, 200, 99],
+        [170, 220, 50],
+        [253, 231, 37],
+    ],
+    float,
+)
 
 
-def hemisphere(radius: float, holes: list[tuple[np.ndarray, float]] = (), n_lat: int = 14,
-               n_lon: int = 56) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Lat/long triangulated upper hemisphere (outward normals, CCW seen from outside) minus holes.
-
-    holes: (unit direction, angular radius in rad). Returns vertices, normals, triangle indices."""
+def hemisphere(
+    radius: float, holes: list[tuple[np.ndarray, float]] = (), n_lat: int = 14, n_lon: int = 56
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Upper hemisphere: vertices, outward normals, CCW triangles; minus (dir, angle) holes."""
     el = np.linspace(0.0, 0.5 * np.pi, n_lat + 1)
     az = np.linspace(0.0, 2 * np.pi, n_lon + 1)[:-1]
     E, A = np.meshgrid(el[:-1], az, indexing="ij")
@@ -24,9 +34,13 @@ def hemisphere(radius: float, holes: list[tuple[np.ndarray, float]] = (), n_lat:
     i, j = np.meshgrid(np.arange(n_lat - 1), np.arange(n_lon), indexing="ij")
     a, b = i * n_lon + j, i * n_lon + (j + 1) % n_lon
     c, d = a + n_lon, b + n_lon
-    quads = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
+    quads = np.concatenate(
+        [np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)]
+    )
     top_a = (n_lat - 1) * n_lon + np.arange(n_lon)
-    cap = np.stack([top_a, (n_lat - 1) * n_lon + (np.arange(n_lon) + 1) % n_lon, np.full(n_lon, pole)], -1)
+    cap = np.stack(
+        [top_a, (n_lat - 1) * n_lon + (np.arange(n_lon) + 1) % n_lon, np.full(n_lon, pole)], -1
+    )
     tris = np.concatenate([quads, cap])
     if len(holes):
         centre = dirs[tris].mean(axis=1)
@@ -60,7 +74,7 @@ def ring(centre: np.ndarray, normal: np.ndarray, radius: float, n: int = 32) -> 
 
 
 def viridis(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """RGBA uint8 colours of values on a viridis ramp from lo (purple) to hi (yellow); NaN maps to lo."""
+    """RGBA uint8 colours on a viridis ramp from lo (purple) to hi (yellow); NaN maps to lo."""
     x = np.nan_to_num(np.asarray(values, float).ravel(), nan=lo)
     s = np.clip((x - lo) / max(hi - lo, 1e-12), 0.0, 1.0) * (len(_VIRIDIS) - 1)
     k = np.minimum(s.astype(int), len(_VIRIDIS) - 2)
