@@ -322,7 +322,7 @@ def print_report(console, info: dict, results: dict, elapsed: float) -> None:
             console.print(f"  {name}: physics alone allows {r['physics']['steps_per_s']:,.0f} "
                           f"steps/s < {TARGET_STEPS_PER_S:,.0f}: the model must get cheaper.")
     loads = [float(x) for x in info["loadavg"][:1] + info.get("loadavg_end", [])[:1]]
-    busy = bool(loads) and max(loads) > (info["cores_usable"] or info["cores"] or 1) - 0.5
+    busy = bool(loads) and max(loads) > (info["cores_usable"] or info["cores"] or 1)
     console.print(f"Load average {' '.join(info['loadavg'])} at the start, "
                   f"{' '.join(info.get('loadavg_end', []))} at the end"
                   + (": other jobs shared the CPU, figures are pessimistic." if busy else "."))

@@ -1,0 +1,118 @@
+"""Where the wall time of a `fastrl run` goes: env stepping, learner, rendering, Rerun logging.
+
+    python bench/run_profile.py [--spec specs/tracelines.yaml] [--timesteps 50000] [--episodes 5]
+
+Runs the real runner (fastrl.runner.start_run) into a temporary runs folder with timers wrapped
+around the vectorised env's step, the evaluation env's step and render, and every RunRecorder
+call. The learner's share is the training time not spent stepping envs or logging. Reported,
+never asserted.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+os.environ.setdefault("CI", "1")
+
+import argparse
+import functools
+import json
+import platform
+import tempfile
+import time
+from collections import defaultdict
+from pathlib import Path
+
+from fastrl.agents.sb3 import FreshInfoVecEnv
+from fastrl.env.fast_env import FastEnv
+from fastrl.log import RunRecorder
+from fastrl.runner import start_run
+
+TIMERS: dict[str, float] = defaultdict(float)
+CALLS: dict[str, int] = defaultdict(int)
+IN_VEC = [False]
+
+
+def timed(name: str, fn, skip_inside_vec: bool = False):
+    """Wrap fn so its wall time accumulates under name."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        if skip_inside_vec and IN_VEC[0]:
+            return fn(*args, **kwargs)
+        t0 = time.perf_counter()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            TIMERS[name] += time.perf_counter() - t0
+            CALLS[name] += 1
+
+    return wrapper
+
+
+def vec_step(fn):
+    """Time the vectorised env step and mark it so the inner env steps are not counted twice."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        IN_VEC[0] = True
+        t0 = time.perf_counter()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            TIMERS["train: env stepping (vec env)"] += time.perf_counter() - t0
+            CALLS["train: env stepping (vec env)"] += 1
+            IN_VEC[0] = False
+
+    return wrapper
+
+
+def instrument() -> None:
+    """Install the timers."""
+    FreshInfoVecEnv.step_wait = vec_step(FreshInfoVecEnv.step_wait)
+    FastEnv.step = timed("eval: env stepping", FastEnv.step, skip_inside_vec=True)
+    FastEnv.render_views = timed("eval: endoscope rendering", FastEnv.render_views)
+    for name in ("log_scene", "log_episode", "log_training", "log_training_columns", "log_summary",
+                 "send_blueprint", "close"):
+        setattr(RunRecorder, name, timed(f"logging: {name}", getattr(RunRecorder, name)))
+
+
+def main() -> None:
+    """Run once and print the shares."""
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--spec", default="specs/tracelines.yaml")
+    ap.add_argument("--timesteps", type=int, default=50_000)
+    ap.add_argument("--episodes", type=int, default=5)
+    ap.add_argument("--json", type=Path)
+    args = ap.parse_args()
+    instrument()
+    with tempfile.TemporaryDirectory() as root:
+        t0 = time.perf_counter()
+        run = start_run(args.spec, [f"train.timesteps={args.timesteps}", f"evaluate.episodes={args.episodes}"],
+                        root, progress=False)
+        wall = time.perf_counter() - t0
+        meta = json.loads((run / "meta.json").read_text())
+    train = meta["train_seconds"]
+    logging = sum(v for k, v in TIMERS.items() if k.startswith("logging"))
+    rows = dict(TIMERS)
+    rows["train: learner and callbacks (rest of training)"] = train - TIMERS["train: env stepping (vec env)"] - \
+        TIMERS["logging: log_training"]
+    print(f"fastrl run profile  {platform.processor() or platform.machine()}  {os.cpu_count()} cpus  "
+          f"python {platform.python_version()}")
+    print(f"spec {args.spec}  timesteps {meta['trained_timesteps']}  eval episodes {args.episodes}")
+    print(f"wall {wall:.1f} s  (training {train:.1f} s, {meta['trained_timesteps'] / train:.0f} steps/s)\n")
+    print(f"{'part':52s} {'seconds':>9s} {'share':>7s} {'calls':>8s}")
+    for name, sec in sorted(rows.items(), key=lambda kv: -kv[1]):
+        print(f"{name:52s} {sec:9.2f} {sec / wall:7.1%} {CALLS.get(name, 0):8d}")
+    print(f"\n{'env stepping (training + evaluation)':52s} "
+          f"{TIMERS['train: env stepping (vec env)'] + TIMERS['eval: env stepping']:9.2f} "
+          f"{(TIMERS['train: env stepping (vec env)'] + TIMERS['eval: env stepping']) / wall:7.1%}")
+    print(f"{'Rerun logging (all calls)':52s} {logging:9.2f} {logging / wall:7.1%}")
+    if args.json:
+        args.json.write_text(json.dumps({"wall": wall, "train_seconds": train, "parts": rows,
+                                         "logging": logging}, indent=2))
+
+
+if __name__ == "__main__":
+    main()
