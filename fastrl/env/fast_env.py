@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import gymnasium as gym
 import mujoco
@@ -40,7 +41,8 @@ class FastEnv(gym.Env):
             self.actions = ContinuousActions(spec.actions, ranges, self.dt, self.model.body("scope_optics").id)
         self.action_space = self.actions.space
         self.feature_names = list(spec.reward.features)
-        self.feature_fns = [(REWARD_FEATURES[n].fn, spec.reward.features[n].params) for n in self.feature_names]
+        self.feature_fns = [partial(REWARD_FEATURES[n].fn, **spec.reward.features[n].params)
+                            if spec.reward.features[n].params else REWARD_FEATURES[n].fn for n in self.feature_names]
         self.weights = [float(spec.reward.features[n].weight) for n in self.feature_names]
         self.obs_fns = [OBSERVATION_TERMS[n].fn for n in spec.observation.terms()]
         self.obs_dim = sum(OBSERVATION_TERMS[n].size for n in spec.observation.terms())
@@ -48,6 +50,7 @@ class FastEnv(gym.Env):
         self.observation_space = spaces.Box(-np.inf, np.inf, (self.obs_dim * self.stack,), np.float32)
         rays = any("rays" in REWARD_FEATURES[n].needs for n in self.feature_names)
         self.sensor = Sensor(self.task, rays)
+        self.sensor.bind(self.data)
         self.state = TaskState()
         self.state.dt, self.state.gamma = self.dt, spec.reward.gamma
         self.state.fov = math.radians(spec.scope.fov_deg)
@@ -90,7 +93,7 @@ class FastEnv(gym.Env):
             mujoco.mj_step(m, d, nstep=self.substeps - 1)
         d.qpos[self.lens] = -d.qpos[self.cable]  # remove the soft coupling's drift: replay is then exact
         mujoco.mj_step1(m, d)
-        if not np.isfinite(d.qpos[0]):
+        if not math.isfinite(d.qpos[0]):
             raise RuntimeError("physics diverged (non-finite state)")
         return self._advance()
 
@@ -153,7 +156,7 @@ class FastEnv(gym.Env):
         self.sensor.read(s, self.model, self.data, first=False)
         was_green = s.green
         self.elapsed = update_dwell(s, self.elapsed, self.dt)
-        vals = [fn(s, **p) for fn, p in self.feature_fns]
+        vals = [fn(s) for fn in self.feature_fns]
         reward = sum(w * v for w, v in zip(self.weights, vals))
         terminated = False
         if s.completed:

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import mujoco
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..model.compiler import CompiledTask
 from ..spec.geometry import sample_polyline
@@ -13,8 +15,10 @@ from ..terms.rewards import cue_potential
 from ..terms.state import TaskState
 from ..terms.vec import dot, mat_quat, norm
 
-LINE_RESOLUTION = 0.0005  # the line is sampled every 0.5 mm for the deviation (error <= 0.25 mm)
-RAY_GROUPS = np.array([1, 0, 1, 1, 1, 1], np.uint8)  # avatars (group 1) do not occlude
+LINE_RESOLUTION = 0.0005  # grid cell of the line-deviation lookup (m)
+# Rays see world geoms (group 0) only: avatars (1) do not occlude, the shell (2) cannot occlude a point
+# on the inside of a convex dome, and group 3 holds the scope's internal masses around the camera.
+RAY_GROUPS = np.array([1, 0, 0, 0, 1, 1], np.uint8)
 
 
 class Sensor:
@@ -27,11 +31,17 @@ class Sensor:
         assert list(task.qadr) == list(range(self.qslice.start, self.qslice.stop)), "portal joints must be contiguous"
         self.line = task.targets.line
         if self.line is not None:
-            self.line_points = sample_polyline(self.line[:, :2], LINE_RESOLUTION)
+            self.line_grid = distance_grid(tuple(map(tuple, self.line[:, :2].round(9))), task.spec.scene.radius + 0.03)
         self.geomid = np.zeros(1, np.int32)
         self.ray_points = np.zeros((0, 3))
         self.ray_exclude = task.model.body("scope_shaft").id
-        self.half_fov = math.radians(0.5 * task.model.cam_fovy[self.cam])
+        self.cos_half_fov = math.cos(math.radians(0.5 * task.model.cam_fovy[self.cam]))
+        self.ray_pnt, self.ray_vec = np.zeros(3), np.zeros(3)
+        self.views = None
+
+    def bind(self, data: mujoco.MjData) -> None:
+        """Keep views into the data the sensor reads (they stay valid for the data's lifetime)."""
+        self.views = (data.cam_xpos[self.cam], data.cam_xmat[self.cam], data.qpos[self.qslice])
 
     def set_target(self, s: TaskState, k: int, pos, fwd, up, quat) -> None:
         """Point the state at subtask k's avatar and tolerances."""
@@ -46,14 +56,15 @@ class Sensor:
             r = 0.8 * t.size
             x = np.cross(up, fwd)
             ring = [pos + r * (math.cos(a) * x + math.sin(a) * up) for a in np.linspace(0, 2 * math.pi, 8, endpoint=False)]
-            self.ray_points = np.array([pos] + ring) + 2e-3 * fwd
+            self.ray_points = [tuple(p) for p in (np.array([pos] + ring) + 2e-3 * fwd).tolist()]
 
     def read(self, s: TaskState, model: mujoco.MjModel, data: mujoco.MjData, first: bool) -> None:
         """Update the state from the data (positions current, as after mj_step1 or mj_forward)."""
-        pos = tuple(data.cam_xpos[self.cam].tolist())
-        m = data.cam_xmat[self.cam].tolist()
+        xpos, xmat, qpos = self.views
+        pos = tuple(xpos.tolist())
+        m = xmat.tolist()
         quat = mat_quat(m)
-        q = tuple(data.qpos[self.qslice].tolist())
+        q = tuple(qpos.tolist())
         if first:
             s.tip_vel = s.tip_accel = (0.0, 0.0, 0.0)
             s.tip_quat_rate, s.portal_vel = (0.0,) * 4, (0.0,) * 5
@@ -65,8 +76,11 @@ class Sensor:
             vel = ((pos[0] - p0[0]) * k, (pos[1] - p0[1]) * k, (pos[2] - p0[2]) * k)
             s.tip_accel = ((vel[0] - v0[0]) * k, (vel[1] - v0[1]) * k, (vel[2] - v0[2]) * k)
             s.tip_vel = vel
-            s.tip_quat_rate = tuple((a - b) * k for a, b in zip(quat, q0))
-            s.portal_vel = tuple((a - b) * k for a, b in zip(q, s.portal))
+            s.tip_quat_rate = ((quat[0] - q0[0]) * k, (quat[1] - q0[1]) * k, (quat[2] - q0[2]) * k,
+                               (quat[3] - q0[3]) * k)
+            q1 = s.portal
+            s.portal_vel = ((q[0] - q1[0]) * k, (q[1] - q1[1]) * k, (q[2] - q1[2]) * k, (q[3] - q1[3]) * k,
+                            (q[4] - q1[4]) * k)
         s.tip_pos = s.cam_pos = pos
         s.tip_quat, s.portal = quat, q
         s.tip_speed = norm(s.tip_vel)
@@ -98,22 +112,53 @@ class Sensor:
         if fwd[2] > -1e-3:
             return 0.1
         k = pos[2] / fwd[2]
-        e = self.line_points - (pos[0] - fwd[0] * k, pos[1] - fwd[1] * k)
-        return math.sqrt(min(0.01, float(np.einsum("ij,ij->i", e, e).min())))
+        return self.line_grid(pos[0] - fwd[0] * k, pos[1] - fwd[1] * k)
 
     def _ray_fraction(self, model, data, s: TaskState) -> float:
         """Share of avatar sample points in view and not occluded from the camera."""
         seen = 0
-        cam = np.array(s.cam_pos)
+        c, f = s.cam_pos, s.cam_fwd
+        pnt, vec = self.ray_pnt, self.ray_vec
+        pnt[:] = c
         for p in self.ray_points:
-            d = p - cam
-            n = math.sqrt(d @ d)
-            if math.acos(max(-1.0, min(1.0, dot(d, s.cam_fwd) / n))) > self.half_fov:
+            d = (p[0] - c[0], p[1] - c[1], p[2] - c[2])
+            n = norm(d)
+            if dot(d, f) < self.cos_half_fov * n:
                 continue
-            hit = mujoco.mj_ray(model, data, cam, d / n, RAY_GROUPS, 1, self.ray_exclude, self.geomid)
-            if hit < 0 or hit >= n - 1e-3:
+            vec[:] = d
+            hit = mujoco.mj_ray(model, data, pnt, vec, RAY_GROUPS, 1, self.ray_exclude, self.geomid)
+            if hit < 0 or hit >= 1.0 - 1e-3 / n:  # distance in units of |vec|: beyond the point
                 seen += 1
         return seen / len(self.ray_points)
+
+
+class DistanceGrid:
+    """Distance to a polyline on the plate, precomputed on a grid and interpolated bilinearly."""
+
+    def __init__(self, points: np.ndarray, cell: float = LINE_RESOLUTION, extent: float = 0.2, cap: float = 0.1):
+        dense = sample_polyline(points, 0.25 * cell)
+        self.x0, self.cell, self.cap = -extent, cell, cap
+        self.n = int(round(2 * extent / cell)) + 1
+        axis = self.x0 + cell * np.arange(self.n)
+        gx, gy = np.meshgrid(axis, axis, indexing="ij")
+        dist, _ = cKDTree(dense).query(np.column_stack([gx.ravel(), gy.ravel()]))
+        self.grid = np.minimum(dist.reshape(self.n, self.n), cap).tolist()
+
+    def __call__(self, x: float, y: float) -> float:
+        """Interpolated distance (m) at plate point (x, y), capped."""
+        u, v = (x - self.x0) / self.cell, (y - self.x0) / self.cell
+        if not (0.0 <= u < self.n - 1 and 0.0 <= v < self.n - 1):
+            return self.cap
+        i, j = int(u), int(v)
+        a, b = u - i, v - j
+        g0, g1 = self.grid[i], self.grid[i + 1]
+        return (1 - a) * ((1 - b) * g0[j] + b * g0[j + 1]) + a * ((1 - b) * g1[j] + b * g1[j + 1])
+
+
+@lru_cache(maxsize=8)
+def distance_grid(points: tuple, extent: float) -> DistanceGrid:
+    """The distance grid of a line, shared by every env of the same task."""
+    return DistanceGrid(np.array(points), extent=extent)
 
 
 __all__ = ["Sensor"]

@@ -52,8 +52,8 @@ class DomeScene(Strict):
     kind: Literal["fast_dome"] = "fast_dome"
     radius: float = Field(0.12, ge=0.05, le=0.5, description="inner radius of the shell (m)")
     thickness: float = Field(0.004, gt=0, le=0.02, description="shell thickness (m)")
-    rings: int = Field(10, ge=3, le=40, description="shell tiles from rim to crown")
-    sectors: int = Field(28, ge=6, le=96, description="shell tiles around")
+    rings: int = Field(7, ge=3, le=40, description="shell tiles from rim to crown")
+    sectors: int = Field(18, ge=6, le=96, description="shell tiles around")
     portals: list[Portal] = Field(min_length=1)
 
     @field_validator("portals")
