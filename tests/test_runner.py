@@ -16,8 +16,8 @@ from fastrl.cli import app
 
 from .conftest import spec_file
 
-TINY = ["train.n_envs=2", "train.hyperparams.n_steps=64", "train.hyperparams.batch_size=64",
-        "train.hyperparams.n_epochs=1", "train.log_every=128", "train.checkpoint_every=256",
+TINY = ["train.n_envs=2", "train.ppo.n_steps=64", "train.ppo.batch_size=64",
+        "train.ppo.n_epochs=1", "train.log_every=128", "train.checkpoint_every=256",
         "evaluate.episodes=2", "evaluate.record_episodes=1", "evaluate.image_every=10", "episode.time_limit=8"]
 
 
@@ -89,9 +89,9 @@ def test_set_overrides_reach_the_run_and_bad_ones_are_reported(tmp_path):
     run = only_run(tmp_path)
     assert run.name.endswith("-s3")
     assert "dwell: 0.2" in (run / "spec.yaml").read_text()
-    bad = run_cli(["run", str(spec_file("periscoping")), "--set", "train.hyperparams.n_step=64"], tmp_path / "x")
+    bad = run_cli(["run", str(spec_file("periscoping")), "--set", "train.ppo.n_step=64"], tmp_path / "x")
     assert bad.exit_code == 2
-    assert "train.hyperparams.n_step" in bad.output and "did you mean 'n_steps'" in bad.output
+    assert "train.ppo.n_step" in bad.output and "did you mean 'n_steps'" in bad.output
     bad = run_cli(["run", str(spec_file("periscoping")), "--algo", "SAC"], tmp_path / "y")
     assert bad.exit_code == 2 and "continuous" in bad.output
     assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()

@@ -53,8 +53,8 @@ CASES = [
     Case(
         "unknown_top_level",
         "imagecentring",
-        "evaluate:\n",
-        "evalute:\n",
+        "\nevaluate:",
+        "\nevalute:",
         "evalute:",
         "evalute",
         "unknown field 'evalute' (did you mean 'evaluate'?)",

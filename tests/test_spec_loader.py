@@ -227,7 +227,7 @@ def test_unknown_key_in_nested_mapping_with_suggestion(tmp_path):
     )
 
 
-def test_did_you_mean_skips_fields_already_present(tmp_path):
+def test_did_you_mean_names_the_close_field_even_when_present(tmp_path):
     p = write(
         tmp_path,
         "name: n\n"
@@ -236,7 +236,7 @@ def test_did_you_mean_skips_fields_already_present(tmp_path):
     )
     with pytest.raises(SpecError) as exc:
         load_model(p, Task)
-    assert issues(exc) == [(2, "train.batch_sizes", "unknown field 'batch_sizes'")]
+    assert issues(exc) == [(2, "train.batch_sizes", "unknown field 'batch_sizes' (did you mean 'batch_size'?)")]
 
 
 def test_unknown_key_without_close_match(tmp_path):

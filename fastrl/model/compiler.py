@@ -51,8 +51,8 @@ def build_mjspec(task_spec: TaskSpec) -> tuple[mujoco.MjSpec, dict]:
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.visual.quality.shadowsize = 0
     spec.visual.quality.offsamples = 0
-    spec.visual.quality.numslices = 8  # coarse tessellation of round geoms: 2-3x faster software rendering
-    spec.visual.quality.numstacks = 4
+    spec.visual.quality.numslices = 16  # coarser tessellation of round geoms: faster software rendering
+    spec.visual.quality.numstacks = 6
     spec.visual.global_.offwidth = 640
     spec.visual.global_.offheight = 480
     spec.visual.headlight.ambient = [0.35, 0.35, 0.35]

@@ -150,10 +150,13 @@ def read_yaml(path) -> tuple[Any, LineMap]:
 
 def yaml_scalar(text: str) -> Any:
     """Parse an override value as a YAML scalar or flow value; ValueError if malformed."""
+    loader = _Loader(text)  # a SafeLoader: only plain data, never objects
     try:
-        value = yaml.load(text, Loader=_Loader)  # _Loader derives from SafeLoader
+        value = loader.get_single_data()
     except yaml.YAMLError as e:
         raise ValueError(f"invalid value {text!r}: {getattr(e, 'problem', None) or e}") from None
+    finally:
+        loader.dispose()
     if value is None and text.strip() not in ("", "~", "null", "Null", "NULL"):
         return text  # e.g. "#fff" would otherwise vanish as a comment
     return value
@@ -275,10 +278,7 @@ def _message(err: dict, data: Any, path: tuple, model_cls: type[BaseModel]) -> s
     if kind == "missing" and loc:
         return f"missing required field {loc[-1]!r}"
     if kind == "extra_forbidden" and loc:
-        for seg in path[:-1]:
-            data = data[seg]
-        present = set(data) if isinstance(data, dict) else set()
-        known = {n for m in _models_at(model_cls, loc[:-1]) for n in _fields(m)} - present
+        known = {n for m in _models_at(model_cls, loc[:-1]) for n in _fields(m)}
         close = difflib.get_close_matches(str(loc[-1]), sorted(known), n=1)
         return f"unknown field {loc[-1]!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
     return re.sub(r"^(Value error|Assertion failed), ", "", err["msg"])
