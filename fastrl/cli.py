@@ -64,6 +64,15 @@ def report(error: SpecError) -> None:
         err.print(str(issue), markup=False)
 
 
+def exit_with(error: Exception) -> None:
+    """Report a user error (spec problems, a missing run) and exit 2, without a traceback."""
+    if isinstance(error, SpecError):
+        report(error)
+    else:
+        err.print(str(error), markup=False)
+    raise typer.Exit(code=2) from None
+
+
 def load_or_exit(path: Path, overrides: list[str] | None = None) -> CompiledTask:
     """load(), or print every problem to stderr and exit 2."""
     try:
@@ -159,6 +168,28 @@ def compile_(
     )
 
 
+@app.command()
+def demos(
+    source: Annotated[Path | None, typer.Argument(metavar="RUN_DIR", help="a trained run", show_default=False)] = None,
+    expert: Annotated[Path | None, typer.Option(metavar="SPEC", help="use the scripted expert on SPEC")] = None,
+    n: Annotated[int, typer.Option("-n", help="number of trajectories")] = 20,
+    output: Annotated[Path, typer.Option("-o", "--output", help="folder for the .npz files")] = Path("demos"),
+    seed: Annotated[int, typer.Option(help="seed of the first episode")] = 0,
+    progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
+) -> None:
+    """Write demonstrations (trajectory .npz files) from a trained run or the scripted expert."""
+    from .runner.demos import write_demos
+
+    if (source is None) == (expert is None):
+        err.print("give RUN_DIR, or --expert SPEC", markup=False)
+        raise typer.Exit(code=2)
+    try:
+        paths = write_demos(output, n, seed, run=source, expert_spec=expert, progress=progress)
+    except (SpecError, FileNotFoundError) as e:
+        exit_with(e)
+    out.print(f"wrote {len(paths)} trajectories to {escape(str(output))}")
+
+
 RunsOpt = Annotated[Path, typer.Option("--runs", help="root folder of run directories")]
 
 
@@ -194,12 +225,8 @@ def run(
                   markup=False)
         err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
         raise typer.Exit(code=130) from None
-    except SpecError as e:
-        report(e)
-        raise typer.Exit(code=2) from None
-    except FileNotFoundError as e:
-        err.print(str(e), markup=False)
-        raise typer.Exit(code=2) from None
+    except (SpecError, FileNotFoundError) as e:
+        exit_with(e)
     results = json.loads((run_dir / "eval.json").read_text())
     print_eval(results)
     out.print(f"run saved in {escape(str(run_dir))}; view it with: fastrl view {escape(str(run_dir))}")
@@ -236,12 +263,8 @@ def eval_(
         raise typer.Exit(code=2)
     try:
         results = evaluate_saved(run_dir, episodes) if run_dir else evaluate_expert(expert, (), episodes)
-    except SpecError as e:
-        report(e)
-        raise typer.Exit(code=2) from None
-    except FileNotFoundError as e:
-        err.print(str(e), markup=False)
-        raise typer.Exit(code=2) from None
+    except (SpecError, FileNotFoundError) as e:
+        exit_with(e)
     print_eval(results)
     if output is not None:
         write_text(output, json.dumps(results, indent=2))

@@ -1,5 +1,6 @@
-"""Episode and trajectory data."""
+"""Episode records and the trajectory contract."""
 
 from .episode import EpisodeRecord
+from .trajectory import COORDINATES, SOURCES, Trajectory, TrajectoryError
 
-__all__ = ["EpisodeRecord"]
+__all__ = ["COORDINATES", "SOURCES", "EpisodeRecord", "Trajectory", "TrajectoryError"]

@@ -133,12 +133,12 @@ def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: 
     return out
 
 
-def evaluate_saved(run: Path, episodes: int | None = None) -> dict:
-    """Re-evaluate a saved run's final (or newest) policy without touching its recording."""
+def load_policy(run: Path) -> tuple[TaskSpec, object]:
+    """A saved run's spec and its final (or newest) policy as obs -> action."""
     run = Path(run)
+    if not (run / "spec.yaml").exists():
+        raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
     spec = load_spec(run / "spec.yaml")
-    if episodes:
-        spec = spec.model_copy(update={"evaluate": spec.evaluate.model_copy(update={"episodes": episodes})})
     weights = run / "final" if (run / "final" / "weights.pt").exists() else latest_checkpoint(run)
     if weights is None:
         raise FileNotFoundError(f"{run} has no saved policy")
@@ -146,7 +146,15 @@ def evaluate_saved(run: Path, episodes: int | None = None) -> dict:
     model = build_model(spec, venv)
     load_checkpoint(weights, model, venv)
     venv.training = False
-    return evaluate_run(spec, policy_function(model, venv), None, None)
+    return spec, policy_function(model, venv)
+
+
+def evaluate_saved(run: Path, episodes: int | None = None) -> dict:
+    """Re-evaluate a saved run's policy without touching its recording."""
+    spec, policy = load_policy(run)
+    if episodes:
+        spec = spec.model_copy(update={"evaluate": spec.evaluate.model_copy(update={"episodes": episodes})})
+    return evaluate_run(spec, policy, None, None)
 
 
 def evaluate_expert(spec_path, overrides=(), episodes: int | None = None) -> dict:

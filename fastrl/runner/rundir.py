@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import json
 import platform
 import subprocess
@@ -13,15 +12,10 @@ from pathlib import Path
 
 import yaml
 
+from ..spec import spec_hash
 from ..spec.models import TaskSpec
 
 PACKAGES = ("fastrl", "mujoco", "gymnasium", "stable-baselines3", "torch", "numpy", "pydantic", "rerun-sdk")
-
-
-def spec_hash(spec: TaskSpec) -> str:
-    """SHA-256 of the resolved spec's canonical JSON (first 16 hex digits)."""
-    text = json.dumps(spec.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def new_run_dir(root: Path, spec: TaskSpec) -> Path:

@@ -1,5 +1,8 @@
 """Task specs: pydantic models, the YAML loader with file:line errors, JSON Schema."""
 
+import hashlib
+import json
+
 from .loader import SpecError, SpecIssue, apply_overrides, load_model, read_yaml
 from .models import Avatar, Cue, DomeScene, Line, Portal, Scope, Task, TaskSpec
 
@@ -9,10 +12,16 @@ def load_spec(path, overrides=()) -> TaskSpec:
     return load_model(path, TaskSpec, list(overrides))
 
 
+def spec_hash(spec: TaskSpec) -> str:
+    """SHA-256 of the resolved spec's canonical JSON (first 16 hex digits)."""
+    text = json.dumps(spec.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
 def json_schema() -> dict:
     """JSON Schema of a task spec, for editors."""
     return TaskSpec.model_json_schema()
 
 
 __all__ = ["Avatar", "Cue", "DomeScene", "Line", "Portal", "Scope", "SpecError", "SpecIssue", "Task",
-           "TaskSpec", "apply_overrides", "json_schema", "load_model", "load_spec", "read_yaml"]
+           "TaskSpec", "apply_overrides", "json_schema", "load_model", "load_spec", "read_yaml", "spec_hash"]

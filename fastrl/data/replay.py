@@ -1,0 +1,47 @@
+"""Make trajectories from a policy, and replay them in the compiled task to recompute everything."""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from ..spec import spec_hash
+from .trajectory import Trajectory
+
+
+def rollout_trajectory(env, policy: Callable, seed: int, meta: dict,
+                       on_reset: Callable | None = None) -> tuple[Trajectory, np.ndarray]:
+    """Run one episode and keep its portal coordinates and actions; also return the observations."""
+    u = env.unwrapped
+    obs, _ = env.reset(seed=seed)
+    if on_reset is not None:
+        on_reset()
+    times, coords, actions, observations = [0.0], [u.portal_coordinates()], [], [obs]
+    done = False
+    while not done:
+        action = policy(obs)
+        obs, _, term, trunc, info = env.step(action)
+        actions.append(np.asarray(action))
+        times.append(info["time"])
+        coords.append(u.portal_coordinates())
+        observations.append(obs)
+        done = term or trunc
+    meta = {"spec": u.task_spec.name, "spec_hash": spec_hash(u.task_spec), "seed": seed,
+            "subtasks": info["subtask"], "subtasks_total": info["subtasks_total"], **meta}
+    return Trajectory(np.array(times), np.array(coords), meta, np.array(actions)), np.array(observations)
+
+
+def replay(env, traj: Trajectory) -> tuple[np.ndarray, list[dict], np.ndarray]:
+    """Observations, infos and rewards of a trajectory, recomputed by placing the scope at each sample."""
+    u = env.unwrapped
+    obs, info = u.reset(seed=int(traj.meta.get("seed", 0)), options={"portal": traj.portal[0]})
+    observations, infos, rewards = [obs], [info], [0.0]
+    for q in traj.portal[1:]:
+        obs, reward, term, trunc, info = u.replay_step(q)
+        observations.append(obs)
+        infos.append(info)
+        rewards.append(reward)
+        if term:
+            break
+    return np.array(observations), infos, np.array(rewards)
