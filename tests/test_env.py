@@ -203,3 +203,14 @@ def test_portal_coordinates_round_trip_and_are_clipped_to_their_ranges():
     assert np.allclose(u.portal_coordinates()[[0, 2]], u.task.ranges[[0, 2], 1])
     with pytest.raises(ValueError):
         u.set_portal_coordinates([0, 0, np.nan, 0, 0])
+
+
+def test_rays_see_the_avatar_at_the_solved_view_and_not_when_looking_away():
+    env = fastrl.make(spec_file("periscoping"))
+    env.reset(seed=0)
+    u = env.unwrapped
+    q = goal_pose(env)
+    _, _, _, _, info = u.replay_step(q)
+    assert info["features"]["rays"] == 1.0
+    _, _, _, _, info = u.replay_step(q + np.array([0, 0, 0, 0, np.pi]))  # light cable half a turn away
+    assert info["features"]["rays"] == 0.0

@@ -54,7 +54,7 @@ class FastEnv(gym.Env):
         self.state = TaskState()
         self.state.dt, self.state.gamma = self.dt, spec.reward.gamma
         self.state.fov = math.radians(spec.scope.fov_deg)
-        self.state.portal_lo, self.state.portal_hi = ranges[:, 0].copy(), ranges[:, 1].copy()
+        self.state.portal_lo, self.state.portal_hi = tuple(ranges[:, 0].tolist()), tuple(ranges[:, 1].tolist())
         self.state.subtasks_total = len(self.task.targets)
         self.lens, self.cable = self.task.lens_qadr, int(self.task.qadr[4])
         self._renderer = None

@@ -1,0 +1,1 @@
+"""Agents: the scripted expert and forward RL on stable-baselines3."""
