@@ -38,10 +38,10 @@ def test_angle_distance_horizon_features_follow_the_cue():
 
 
 def test_progress_completed_contact_time():
-    s = state(dwell=0.6, prev_dwell=0.4, completed=True, contacts=2)
+    s = state(dwell_gain=0.2, completed=True, contacts=2)
     assert f("progress", s) == pytest.approx(0.2)
     assert f("completed", s) == 1.0 and f("contact", s) == 1.0 and f("time", s) == 1.0
-    s = state(dwell=0.0, prev_dwell=0.8, completed=False, contacts=0)
+    s = state(dwell_gain=0.0, completed=False, contacts=0)
     assert f("progress", s) == 0.0 and f("completed", s) == 0.0 and f("contact", s) == 0.0
 
 
@@ -99,3 +99,15 @@ def test_feature_params_are_checked_against_the_signature():
     assert REWARD_FEATURES["velocity"].check_params({"max_speed": 0.1}) == []
     assert REWARD_FEATURES["velocity"].check_params({"max_sped": 0.1})[0][0] == "max_sped"
     assert REWARD_FEATURES["velocity"].check_params({"max_speed": "fast"})[0][1].startswith("must be a number")
+
+
+def test_progress_cannot_be_farmed_by_leaving_and_refilling_the_dwell_bar():
+    from fastrl.env.cues import update_dwell
+
+    s = state(centring=0.0, horizon=0.0, distance=0.03, dwell_time=1.0)
+    elapsed, total = 0.0, 0.0
+    for green in [True] * 8 + [False] + [True] * 8 + [False] + [True] * 12:
+        s.centring = 0.0 if green else 1.0
+        elapsed = update_dwell(s, elapsed, 0.1)
+        total += f("progress", s)
+    assert s.completed and total == pytest.approx(1.0)

@@ -17,5 +17,7 @@ def update_dwell(s: TaskState, elapsed: float, dt: float) -> float:
     elapsed = elapsed + dt if s.green else 0.0
     s.prev_dwell = s.dwell
     s.dwell = 1.0 if s.dwell_time <= 0 else min(1.0, elapsed / s.dwell_time)
+    s.dwell_gain = max(0.0, s.dwell - s.dwell_best)
+    s.dwell_best = max(s.dwell_best, s.dwell)
     s.completed = s.green and elapsed >= s.dwell_time - 1e-9
     return elapsed

@@ -74,7 +74,7 @@ class FastEnv(gym.Env):
         self._place(np.asarray(q0, float))
         self.actions.reset(self.data, self.task.qadr)
         s = self.state
-        s.time, s.dwell, s.prev_dwell, s.potential = 0.0, 0.0, 0.0, 0.0
+        s.time, s.dwell, s.prev_dwell, s.dwell_best, s.potential = 0.0, 0.0, 0.0, 0.0, 0.0
         self._select(0)
         self.sensor.read(s, self.model, self.data, first=True)
         s.green = all(cue_checks(s))
@@ -166,7 +166,7 @@ class FastEnv(gym.Env):
             if not terminated:
                 self._select(self.done_count)
                 self.sensor.errors(s, self.model, self.data)
-                s.dwell = s.prev_dwell = 0.0
+                s.dwell = s.prev_dwell = s.dwell_best = 0.0
                 s.green = all(cue_checks(s))
             self._paint()
         elif s.green != was_green:

@@ -28,8 +28,8 @@ def cue_potential(s: TaskState) -> float:
 
 @feature
 def progress(s: TaskState) -> float:
-    """Growth of the dwell bar this step (the progress bar filling while all cues hold)."""
-    return max(0.0, s.dwell - s.prev_dwell)
+    """Growth of the dwell bar beyond its best so far for this avatar (sums to 1 per avatar: not farmable)."""
+    return s.dwell_gain
 
 
 @feature

@@ -15,7 +15,7 @@ class TaskState:
         "target_pos", "target_quat", "target_fwd", "target_up",
         "centring", "horizon", "distance", "dist_lo", "dist_hi",
         "tol_centring", "tol_horizon", "dwell_time",
-        "green", "dwell", "prev_dwell", "completed", "subtask", "subtasks_total",
+        "green", "dwell", "prev_dwell", "dwell_best", "dwell_gain", "completed", "subtask", "subtasks_total",
         "contacts", "line_deviation", "ray_fraction",
         "potential", "prev_potential", "goals",
     )
@@ -36,7 +36,7 @@ class TaskState:
         self.dist_lo, self.dist_hi = 0.02, 0.05
         self.tol_centring, self.tol_horizon, self.dwell_time = 0.14, 0.26, 0.5
         self.green = self.completed = False
-        self.dwell = self.prev_dwell = 0.0
+        self.dwell = self.prev_dwell = self.dwell_best = self.dwell_gain = 0.0
         self.subtask, self.subtasks_total = 0, 1
         self.contacts = 0
         self.line_deviation = self.ray_fraction = 0.0
