@@ -72,7 +72,7 @@ def machine_info() -> dict:
     except (OSError, subprocess.SubprocessError):
         commit = None
     return {
-        "date_utc": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "date_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "cpu": cpu, "cpu_mhz": mhz, "cores": os.cpu_count(),
         "cores_usable": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
         "loadavg": load, "platform": platform.platform(),

@@ -310,7 +310,8 @@ def runs_(root: RunsOpt = Path("runs"),
         table.add_column(col, overflow="fold")
     for r in rows:
         pct = lambda v: "-" if v is None else f"{v:.0%}"  # noqa: E731
-        table.add_row(str(Path(r["run"]).relative_to(root)), r["spec"] or "?", r["algo"] or "?", str(r["seed"]), r["status"],
+        table.add_row(str(Path(r["run"]).relative_to(root)), r["spec"] or "?", r["algo"] or "?", str(r["seed"]),
+                      r["status"],
                       str(r["timesteps"] or "-"), "-" if r["wall_s"] is None else f"{r['wall_s']:.0f}s",
                       pct(r["success"]), pct(r["subtasks"]))
     out.print(table)

@@ -157,7 +157,7 @@ def test_compile_writes_loadable_mjcf(tmp_path):
     assert [getattr(loaded, s) for s in sizes] == [getattr(ref, s) for s in sizes]
     assert loaded.opt.timestep == ref.opt.timestep
     assert (
-        f"nbody {ref.nbody}, njnt {ref.njnt}, ngeom {ref.ngeom}, nu {ref.nu}, timestep 0.005 s"
+        f"nbody {ref.nbody}, njnt {ref.njnt}, ngeom {ref.ngeom}, nu {ref.nu}, timestep {ref.opt.timestep:g} s"
         in result.stdout
     )
 

@@ -54,7 +54,7 @@ def test_the_shaft_always_passes_through_the_portal_point(mode):
     rng = np.random.default_rng(0)
     env.reset(seed=0)
     worst, contacts = 0.0, 0
-    for i in range(600):
+    for _ in range(600):
         a = rng.integers(0, 11) if mode == "discrete" else rng.uniform(-1, 1, 7)
         _, _, term, trunc, info = env.step(a)
         tip, axis = u.data.xpos[shaft], u.data.xmat[shaft].reshape(3, 3)[:, 2]
@@ -156,7 +156,7 @@ def test_bad_actions_raise_and_out_of_range_continuous_actions_are_clipped():
 def test_truncates_at_the_time_limit():
     env = fastrl.make(spec_file("periscoping"), episode={"time_limit": 1.0})
     env.reset(seed=0)
-    for i in range(20):
+    for _ in range(20):
         _, _, term, trunc, _ = env.step(0)
     assert trunc and not term
 

@@ -80,7 +80,7 @@ CASES = [
     Case(
         "wrong_type_int",
         "imagecentring",
-        "  substeps: 10 ",
+        "  substeps: 5 ",
         "  substeps: ten ",
         "substeps: ten",
         "episode.substeps",

@@ -68,7 +68,8 @@ def _optimizers(model: BaseAlgorithm) -> dict[str, torch.optim.Optimizer]:
 def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict) -> Path:
     """Write weights and optimizer states (torch tensors only), normalisation stats (npz) and state (JSON)."""
     path.mkdir(parents=True, exist_ok=True)
-    tensors = {"policy": model.policy.state_dict(), "optimizers": {k: o.state_dict() for k, o in _optimizers(model).items()}}
+    optimizers = {k: o.state_dict() for k, o in _optimizers(model).items()}
+    tensors = {"policy": model.policy.state_dict(), "optimizers": optimizers}
     if isinstance(model, SAC) and model.log_ent_coef is not None:
         tensors["log_ent_coef"] = model.log_ent_coef.detach().clone()
     tmp = path / "weights.pt.tmp"

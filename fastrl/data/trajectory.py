@@ -61,7 +61,7 @@ class Trajectory:
         return path
 
     @classmethod
-    def load(cls, path: Path) -> "Trajectory":
+    def load(cls, path: Path) -> Trajectory:
         """Read and check a .npz; TrajectoryError names the file and the problem."""
         path = Path(path)
         try:

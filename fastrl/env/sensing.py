@@ -55,7 +55,8 @@ class Sensor:
         if self.rays:
             r = 0.8 * t.size
             x = np.cross(up, fwd)
-            ring = [pos + r * (math.cos(a) * x + math.sin(a) * up) for a in np.linspace(0, 2 * math.pi, 4, endpoint=False)]
+            angles = np.linspace(0, 2 * math.pi, 4, endpoint=False)
+            ring = [pos + r * (math.cos(a) * x + math.sin(a) * up) for a in angles]
             self.ray_points = [tuple(p) for p in (np.array([pos] + ring) + 2e-3 * fwd).tolist()]
 
     def read(self, s: TaskState, model: mujoco.MjModel, data: mujoco.MjData, first: bool) -> None:

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import mujoco
 import numpy as np
@@ -78,7 +78,8 @@ def compile_task(task_spec: TaskSpec) -> CompiledTask:
         spec=task_spec, model=model, targets=targets, portal_point=point, portal_rot=rot,
         ranges=joint_ranges(task_spec.scope),
         qadr=np.array([model.jnt_qposadr[j] for j in jid]), vadr=np.array([model.jnt_dofadr[j] for j in jid]),
-        lens_qadr=int(model.jnt_qposadr[model.joint("lens").id]), camera=model.camera("endoscope").id, tip_geom=model.geom("tip").id,
+        lens_qadr=int(model.jnt_qposadr[model.joint("lens").id]), camera=model.camera("endoscope").id,
+        tip_geom=model.geom("tip").id,
         avatar_geoms=np.array([[model.geom(f"avatar_{i}").id, model.geom(f"avatar_{i}_up").id]
                                for i in range(len(targets))]),
         xml=spec.to_xml())

@@ -47,7 +47,7 @@ def build_dome(spec: mujoco.MjSpec, scene: DomeScene) -> dict[str, tuple[np.ndar
                    size=[(r + t) * math.cos(el_cap) * 1.05, 0.5 * t],
                    pos=[0, 0, r * math.sin(el_cap) + 0.5 * t + r * (1 - math.sin(el_cap)) * 0.5],
                    rgba=SHELL_RGBA, group=SHELL_GROUP, contype=WORLD_CONTYPE, conaffinity=WORLD_CONAFFINITY)
-    for name, (point, rot) in portals.items():
+    for name, (point, _) in portals.items():
         normal = point / np.linalg.norm(point)
         world.add_geom(name=f"portal_{name}", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
                        size=[1.4 * next(p.radius for p in scene.portals if p.name == name), 0.3 * t],

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
@@ -11,7 +11,8 @@ from ..data.episode import EpisodeRecord
 Policy = Callable[[np.ndarray], object]
 
 
-def record_episode(env, policy: Policy, seed: int, image_every: int = 0, on_reset: Callable | None = None) -> EpisodeRecord:
+def record_episode(env, policy: Policy, seed: int, image_every: int = 0,
+                   on_reset: Callable | None = None) -> EpisodeRecord:
     """Run one episode from `seed`; keep poses, rewards, features, cues and every k-th endoscope image."""
     u = env.unwrapped
     obs, info = env.reset(seed=seed)

@@ -6,7 +6,7 @@ import json
 import platform
 import subprocess
 import sys
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from importlib import metadata
 from pathlib import Path
 
@@ -20,7 +20,7 @@ PACKAGES = ("fastrl", "mujoco", "gymnasium", "stable-baselines3", "torch", "nump
 
 def new_run_dir(root: Path, spec: TaskSpec) -> Path:
     """runs/<spec name>/<UTC timestamp>-<algo>-s<seed>/, made unique if it exists."""
-    stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
     base = Path(root) / spec.name / f"{stamp}-{spec.train.algo.lower()}-s{spec.train.seed}"
     path, k = base, 1
     while path.exists():
@@ -65,7 +65,7 @@ def write_meta(run: Path, spec: TaskSpec, source: str, extra: dict | None = None
         "command": sys.argv, "git_commit": git_commit(), "python": sys.version.split()[0],
         "versions": versions, "machine": {"platform": platform.platform(), "processor": platform.processor(),
                                           "cpus": _cpu_count()},
-        "started_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"), **(extra or {}),
+        "started_utc": datetime.now(UTC).isoformat(timespec="seconds"), **(extra or {}),
     }
     (run / "meta.json").write_text(json.dumps(meta, indent=2))
     return meta

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
@@ -13,11 +13,13 @@ from ..terms import OBSERVATION_TERMS, REWARD_FEATURES
 from . import geometry as geo
 from .training import Evaluate, Train
 
+
 def _raise(errors: list[tuple[tuple, str, Any]]) -> None:
     """Raise one ValidationError carrying every (loc, message, input) with its own location."""
     if errors:
         raise ValidationError.from_exception_data("TaskSpec", [
-            InitErrorDetails(type=PydanticCustomError("spec", msg), loc=loc, input=value) for loc, msg, value in errors])
+            InitErrorDetails(type=PydanticCustomError("spec", msg), loc=loc, input=value)
+            for loc, msg, value in errors])
 
 
 def _fail(dotted: str, msg: str) -> None:
@@ -42,7 +44,8 @@ class Portal(Strict):
     name: str
     azimuth: float = Field(description="degrees about +z from +x")
     elevation: float = Field(ge=0, le=85, description="degrees above the plate")
-    aim: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="point the shaft aims at when pitch = yaw = 0 (m)")
+    aim: tuple[float, float, float] = Field((0.0, 0.0, 0.0),
+                                            description="point the shaft aims at when pitch = yaw = 0 (m)")
     radius: Pos = Field(0.012, description="radius of the hole (m)")
 
 
@@ -65,7 +68,7 @@ class DomeScene(Strict):
         return v
 
 
-Scene = Annotated[Union[DomeScene], Field(discriminator="kind")]
+Scene = Annotated[DomeScene, Field(discriminator="kind")]
 
 
 class StartPose(Strict):
@@ -127,7 +130,8 @@ class Avatar(Strict):
 
     surface: Literal["plate", "dome"] = "plate"
     at: tuple[float, float]
-    heading_deg: float = Field(90.0, description="direction of the avatar's up, deg (plate: from +x; dome: from the zenith)")
+    heading_deg: float = Field(
+        90.0, description="direction of the avatar's up, deg (plate: from +x; dome: from the zenith)")
     cue: Cue | None = None
 
 
@@ -148,7 +152,8 @@ class Task(Strict):
     avatars: list[Avatar] = []
     line: Line | None = None
     cue: Cue = Cue()
-    jitter: tuple[NonNeg, NonNeg] = Field((0.0, 0.0), description="random avatar offset at reset: metres on the plate, degrees on the dome")
+    jitter: tuple[NonNeg, NonNeg] = Field(
+        (0.0, 0.0), description="random avatar offset at reset: metres on the plate, degrees on the dome")
 
     @model_validator(mode="after")
     def _targets(self):
@@ -226,7 +231,8 @@ class Reward(Strict):
         errors = []
         for name, f in self.features.items():
             if name not in REWARD_FEATURES:
-                errors.append((("features", name), f"unknown reward feature '{name}' (known: {', '.join(REWARD_FEATURES)})", name))
+                known = ", ".join(REWARD_FEATURES)
+                errors.append((("features", name), f"unknown reward feature '{name}' (known: {known})", name))
                 continue
             for key, problem in REWARD_FEATURES[name].check_params(f.params):
                 errors.append((("features", name, "params", key), problem, f.params[key]))
@@ -281,7 +287,8 @@ class TaskSpec(Strict):
         """Why an avatar is outside the dome or out of the scope's reach, or None."""
         r = self.scene.radius
         if av.surface == "plate" and math.hypot(*av.at) > r - 0.01:
-            return f"target [{av.at[0]}, {av.at[1]}] is outside the dome: it is {math.hypot(*av.at):.3f} m from the centre, the plate inside the shell ends at {r - 0.01:.3f} m"
+            return (f"target [{av.at[0]}, {av.at[1]}] is outside the dome: it is {math.hypot(*av.at):.3f} m from "
+                    f"the centre, the plate inside the shell ends at {r - 0.01:.3f} m")
         if av.surface == "dome" and not 5.0 <= av.at[1] <= 88.0:
             return f"target elevation {av.at[1]} deg is outside the dome's inner surface (5 to 88 deg)"
         pos, fwd, _ = geo.avatar_pose(r, av.surface, av.at, av.heading_deg)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 
-
 class TaskState:
     """Everything the terms may read at one control step; the env fills it in place."""
 
