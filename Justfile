@@ -18,6 +18,10 @@ test *args:
 bench:
     MUJOCO_GL=egl python bench/env_throughput.py
 
+# where the wall time of a run goes (env stepping, learner, rendering, logging)
+bench-run spec=spec:
+    MUJOCO_GL=egl python bench/run_profile.py --spec {{spec}}
+
 # lint and format check
 lint:
     ruff check fastrl tests bench

@@ -205,7 +205,7 @@ def run(
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
 ) -> None:
     """Train an agent on a spec, evaluate it and record everything to RUN_DIR/recording.rrd."""
-    from .runner import RunInterrupted, resume_run, start_run
+    from .runner import EvaluationInterrupted, RunInterrupted, resume_run, start_run
 
     overrides = list(set_ or [])
     overrides += [f"train.algo={algo}"] if algo else []
@@ -224,6 +224,10 @@ def run(
         err.print(f"interrupted at {stop.timesteps} timesteps; checkpoint and recording saved in {stop.run}",
                   markup=False)
         err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
+        raise typer.Exit(code=130) from None
+    except EvaluationInterrupted as stop:
+        err.print(f"evaluation interrupted; the trained policy is saved in {stop.run}/final", markup=False)
+        err.print(f"evaluate it with: fastrl eval {stop.run}", markup=False)
         raise typer.Exit(code=130) from None
     except (SpecError, FileNotFoundError) as e:
         exit_with(e)

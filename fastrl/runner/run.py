@@ -28,6 +28,14 @@ class RunInterrupted(Exception):
         self.run, self.timesteps = run, timesteps
 
 
+class EvaluationInterrupted(Exception):
+    """Evaluation was stopped by the user; the trained policy is saved in final/."""
+
+    def __init__(self, run: Path):
+        super().__init__("evaluation interrupted")
+        self.run = run
+
+
 def start_run(spec_path, overrides=(), root="runs", console: Console | None = None, progress: bool = True) -> Path:
     """Train, evaluate and record a new run of a spec file; return its directory."""
     spec = load_spec(spec_path, overrides)
@@ -102,7 +110,11 @@ def _train_and_evaluate(run: Path, spec: TaskSpec, ckpt: Path | None, console: C
         save_checkpoint(run / "final", model, venv, state)
         update_meta(run, status="evaluating", trained_timesteps=int(model.num_timesteps), train_seconds=seconds,
                     train_fps=model.num_timesteps / max(seconds, 1e-9))
-        results = evaluate_run(spec, policy_function(model, venv), recorder, console)
+        try:
+            results = evaluate_run(spec, policy_function(model, venv), recorder, console)
+        except KeyboardInterrupt:
+            update_meta(run, status="trained, evaluation interrupted")
+            raise EvaluationInterrupted(run) from None
         (run / "eval.json").write_text(json.dumps(results, indent=2))
         recorder.log_summary(results["agent"])
         update_meta(run, status="done", eval_seconds=results["eval_seconds"])
