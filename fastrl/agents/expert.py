@@ -35,6 +35,8 @@ class ScriptedExpert:
     def act(self, obs=None):
         """Next action toward the current avatar's view."""
         env = self.env
+        if env.steps == 0:  # a new episode: the old goal belongs to the previous one
+            self.reset()
         k = min(env.done_count, len(env.t_pos) - 1)
         q = env.portal_coordinates()
         if self.goal_for != k or self.waiting > RESOLVE_EVERY:

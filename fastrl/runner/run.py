@@ -6,6 +6,7 @@ import json
 import time
 from pathlib import Path
 
+import numpy as np
 from rich.console import Console
 
 from ..agents.expert import ScriptedExpert
@@ -73,8 +74,6 @@ def _open_recorder(run: Path, spec: TaskSpec, resuming: bool) -> RunRecorder:
         history = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines() if line.strip()] \
             if (run / "metrics.jsonl").exists() else []
         if history:
-            import numpy as np
-
             keys = sorted({k for row in history for k in row} - {"timesteps"})
             recorder.log_training_columns(np.array([r["timesteps"] for r in history]),
                                           {k: np.array([r.get(k, np.nan) for r in history], float) for k in keys})
