@@ -45,3 +45,18 @@ def replay(env, traj: Trajectory) -> tuple[np.ndarray, list[dict], np.ndarray]:
         if term:
             break
     return np.array(observations), infos, np.array(rewards)
+
+
+def demonstration_pairs(env, trajectories: list[Trajectory]) -> tuple[np.ndarray, np.ndarray]:
+    """(observation, action) pairs of trajectories with actions, observations recomputed by replay."""
+    observations, actions = [], []
+    for traj in trajectories:
+        if traj.actions is None:
+            continue
+        obs, _, _ = replay(env, traj)
+        n = min(len(obs) - 1, len(traj.actions))
+        observations.append(obs[:n])
+        actions.append(traj.actions[:n])
+    if not observations:
+        raise ValueError("no trajectory with actions to learn from")
+    return np.concatenate(observations), np.concatenate(actions)

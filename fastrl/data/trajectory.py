@@ -82,3 +82,17 @@ class Trajectory:
             return cls(time, portal, meta, actions)
         except TrajectoryError as e:
             raise TrajectoryError(f"{path}: {e}") from None
+
+
+def load_trajectories(paths) -> tuple[list[Trajectory], list[str]]:
+    """Load every .npz under the given files or folders; bad files become messages, the rest load."""
+    files = []
+    for p in map(Path, paths):
+        files += sorted(p.glob("*.npz")) if p.is_dir() else [p]
+    good, errors = [], []
+    for f in files:
+        try:
+            good.append(Trajectory.load(f))
+        except TrajectoryError as e:
+            errors.append(str(e))
+    return good, errors
