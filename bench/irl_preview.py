@@ -18,9 +18,9 @@ import time
 
 from fastrl.agents.expert import ScriptedExpert
 from fastrl.agents.sb3 import build_model, make_vec_env, policy_function
-from fastrl.data.replay import rollout_trajectory
+from fastrl.data.replay import expert_transitions, rollout_trajectory
 from fastrl.env import FastEnv
-from fastrl.irl import AdversarialCallback, Discriminator, expert_transitions
+from fastrl.irl import AdversarialCallback, Discriminator
 from fastrl.runner.evaluate import evaluate
 from fastrl.spec import load_spec
 

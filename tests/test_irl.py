@@ -7,8 +7,8 @@ import torch
 import fastrl
 from fastrl.agents.expert import ScriptedExpert
 from fastrl.agents.sb3 import build_model, make_vec_env
-from fastrl.data.replay import rollout_trajectory
-from fastrl.irl import AdversarialCallback, Discriminator, expert_transitions
+from fastrl.data.replay import expert_transitions, rollout_trajectory
+from fastrl.irl import AdversarialCallback, Discriminator
 from fastrl.spec import load_spec
 
 from .conftest import spec_file

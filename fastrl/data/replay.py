@@ -6,6 +6,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..irl.adversarial import Transitions
 from ..spec import spec_hash
 from .trajectory import Trajectory
 
@@ -47,16 +48,32 @@ def replay(env, traj: Trajectory) -> tuple[np.ndarray, list[dict], np.ndarray]:
     return np.array(observations), infos, np.array(rewards)
 
 
-def demonstration_pairs(env, trajectories: list[Trajectory]) -> tuple[np.ndarray, np.ndarray]:
-    """(observation, action) pairs of trajectories with actions, observations recomputed by replay."""
-    observations, actions = [], []
+def replay_demonstrations(env, trajectories: list[Trajectory]):
+    """For each trajectory with actions: its replayed observations (n+1), infos (n+1) and actions (n)."""
     for traj in trajectories:
         if traj.actions is None:
             continue
-        obs, _, _ = replay(env, traj)
+        obs, infos, _ = replay(env, traj)
         n = min(len(obs) - 1, len(traj.actions))
-        observations.append(obs[:n])
-        actions.append(traj.actions[:n])
-    if not observations:
+        yield obs[: n + 1], infos[: n + 1], traj.actions[:n]
+
+
+def demonstration_pairs(env, trajectories: list[Trajectory]) -> tuple[np.ndarray, np.ndarray]:
+    """(observation, action) pairs of trajectories with actions, observations recomputed by replay."""
+    pairs = [(obs[:-1], actions) for obs, _, actions in replay_demonstrations(env, trajectories)]
+    if not pairs:
         raise ValueError("no trajectory with actions to learn from")
-    return np.concatenate(observations), np.concatenate(actions)
+    return np.concatenate([p[0] for p in pairs]), np.concatenate([p[1] for p in pairs])
+
+
+def expert_transitions(env, trajectories: list[Trajectory]) -> Transitions:
+    """Transitions (s, s', terminal, a) of demonstrations for a discriminator, recomputed by replay."""
+    obs, nxt, term, acts = [], [], [], []
+    for o, infos, actions in replay_demonstrations(env, trajectories):
+        obs.append(o[:-1])
+        nxt.append(o[1:])
+        t = np.zeros(len(actions), np.float32)
+        t[-1] = 1.0 if infos[-1]["success"] else 0.0
+        term.append(t)
+        acts.append(actions)
+    return Transitions(np.concatenate(obs), np.concatenate(nxt), np.concatenate(term), np.concatenate(acts))

@@ -105,21 +105,3 @@ class AdversarialCallback(BaseCallback):
         for key, value in self.stats.items():
             self.logger.record(key, value)
 
-
-def expert_transitions(env, trajectories) -> Transitions:
-    """Transitions of demonstrations, observations recomputed by replaying their portal coordinates."""
-    from ..data.replay import replay
-
-    obs, nxt, term, acts = [], [], [], []
-    for traj in trajectories:
-        if traj.actions is None:
-            continue
-        o, infos, _ = replay(env, traj)
-        n = min(len(o) - 1, len(traj.actions))
-        obs.append(o[:n])
-        nxt.append(o[1:n + 1])
-        t = np.zeros(n, np.float32)
-        t[-1] = 1.0 if infos[n]["success"] else 0.0
-        term.append(t)
-        acts.append(traj.actions[:n])
-    return Transitions(np.concatenate(obs), np.concatenate(nxt), np.concatenate(term), np.concatenate(acts))
