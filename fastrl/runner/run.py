@@ -13,7 +13,7 @@ from ..agents.expert import ScriptedExpert
 from ..agents.sb3 import build_model, load_checkpoint, make_vec_env, policy_function, save_checkpoint
 from ..env.fast_env import FastEnv
 from ..log import RunRecorder
-from ..model.compiler import compile_task
+from ..model.compiler import CompiledTask, compile_task
 from ..spec import load_spec
 from ..spec.models import TaskSpec
 from .evaluate import evaluate
@@ -44,7 +44,7 @@ def start_run(spec_path, overrides=(), root="runs", console: Console | None = No
     run = new_run_dir(Path(root), spec)
     write_spec(run, spec, task.xml)
     write_meta(run, spec, str(spec_path), {"status": "training", "overrides": list(overrides)})
-    return _train_and_evaluate(run, spec, None, console or Console(), progress)
+    return _train_and_evaluate(run, spec, task, None, console or Console(), progress)
 
 
 def resume_run(run: Path, console: Console | None = None, progress: bool = True, timesteps: int | None = None) -> Path:
@@ -53,22 +53,23 @@ def resume_run(run: Path, console: Console | None = None, progress: bool = True,
     if not (run / "spec.yaml").exists():
         raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
     spec = load_spec(run / "spec.yaml", [f"train.timesteps={timesteps}"] if timesteps else [])
+    task = compile_task(spec)
     if timesteps:
-        write_spec(run, spec, compile_task(spec).xml)
+        write_spec(run, spec, task.xml)
     ckpt = latest_checkpoint(run)
     if ckpt is None:
         raise FileNotFoundError(f"{run} has no checkpoint to resume from")
-    return _train_and_evaluate(run, spec, ckpt, console or Console(), progress)
+    return _train_and_evaluate(run, spec, task, ckpt, console or Console(), progress)
 
 
-def _open_recorder(run: Path, spec: TaskSpec, resuming: bool) -> RunRecorder:
+def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resuming: bool) -> RunRecorder:
     """The run's recording; a resumed run keeps the old file aside and re-logs the curves so far."""
     path = run / "recording.rrd"
     if resuming and path.exists():
         k = len(list(run.glob("recording.part*.rrd"))) + 1
         path.rename(run / f"recording.part{k}.rrd")
     recorder = RunRecorder(path, recording_id=run.name, run_name=f"{spec.name} {run.name}")
-    recorder.log_scene(compile_task(spec))
+    recorder.log_scene(task)
     recorder.send_blueprint(min(spec.evaluate.record_episodes, spec.evaluate.episodes))
     if resuming:
         history = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines() if line.strip()] \
@@ -80,12 +81,13 @@ def _open_recorder(run: Path, spec: TaskSpec, resuming: bool) -> RunRecorder:
     return recorder
 
 
-def _train_and_evaluate(run: Path, spec: TaskSpec, ckpt: Path | None, console: Console, progress: bool) -> Path:
+def _train_and_evaluate(run: Path, spec: TaskSpec, task: CompiledTask, ckpt: Path | None, console: Console,
+                        progress: bool) -> Path:
     """Train (from a checkpoint if given), save, evaluate agent and expert, write eval.json and the recording."""
     venv = make_vec_env(spec, spec.train.n_envs, spec.train.seed)
     model = build_model(spec, venv)
     before = load_checkpoint(ckpt, model, venv) if ckpt else {}
-    recorder = _open_recorder(run, spec, resuming=ckpt is not None)
+    recorder = _open_recorder(run, spec, task, resuming=ckpt is not None)
     try:
         monitor = TrainingMonitor(run, list(spec.reward.features), spec.train.timesteps, spec.train.log_every,
                                   spec.train.checkpoint_every, recorder, progress)

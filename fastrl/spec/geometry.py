@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 
+from ..terms.vec import mat_quat
+
 
 def sphere_point(radius: float, azimuth_deg: float, elevation_deg: float) -> np.ndarray:
     """Point on a sphere about the origin from azimuth and elevation in degrees."""
@@ -25,22 +27,9 @@ def frame_from_z(z: np.ndarray, x_hint: np.ndarray | None = None) -> np.ndarray:
 
 
 def mat_to_quat(m: np.ndarray) -> np.ndarray:
-    """Rotation matrix to quaternion (w, x, y, z)."""
-    t = np.trace(m)
-    if t > 0:
-        s = math.sqrt(t + 1.0) * 2
-        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-    else:
-        i = int(np.argmax(np.diag(m)))
-        j, k = (i + 1) % 3, (i + 2) % 3
-        s = math.sqrt(1.0 + m[i, i] - m[j, j] - m[k, k]) * 2
-        q = [0.0, 0.0, 0.0, 0.0]
-        q[0] = (m[k, j] - m[j, k]) / s
-        q[1 + i] = 0.25 * s
-        q[1 + j] = (m[j, i] + m[i, j]) / s
-        q[1 + k] = (m[k, i] + m[i, k]) / s
-    q = np.array(q)
-    return q / np.linalg.norm(q) * (1 if q[0] >= 0 else -1)
+    """Rotation matrix to a unit quaternion (w, x, y, z) with w >= 0."""
+    q = np.array(mat_quat(np.asarray(m, float).ravel().tolist()))
+    return q / np.linalg.norm(q)
 
 
 def portal_frame(radius: float, azimuth_deg: float, elevation_deg: float, aim) -> tuple:
