@@ -32,6 +32,7 @@ def main() -> None:
     ap.add_argument("timesteps", type=int)
     ap.add_argument("--spec", default="specs/tracelines.yaml")
     ap.add_argument("--demos", type=int, default=20)
+    ap.add_argument("--no-entropy", action="store_true", help="AIRL: generator reward f without -log pi")
     args = ap.parse_args()
     spec = load_spec(args.spec, ["train.normalize.reward=false"])
     env = FastEnv(spec)
@@ -40,7 +41,8 @@ def main() -> None:
     transitions = expert_transitions(FastEnv(spec), trajs)
     venv = make_vec_env(spec, spec.train.n_envs, spec.train.seed)
     model = build_model(spec, venv)
-    callback = AdversarialCallback(Discriminator(env.observation_space.shape[0], args.kind, 0.99), transitions)
+    callback = AdversarialCallback(Discriminator(env.observation_space.shape[0], args.kind, 0.99), transitions,
+                                   entropy=not args.no_entropy)
     t0 = time.perf_counter()
     while model.num_timesteps < args.timesteps:
         model.learn(100_000, callback=callback, reset_num_timesteps=False)

@@ -204,9 +204,10 @@ def run(
     runs: RunsOpt = Path("runs"),
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
 ) -> None:
-    """Train an agent on a spec, evaluate it and record everything to RUN_DIR/recording.rrd."""
-    from .runner import EvaluationInterrupted, RunInterrupted, resume_run, start_run
+    """Train an agent on a spec, evaluate it and record everything to RUN_DIR/recording.rrd.
 
+    With an `irl` section (algorithm gail, airl or bc) the agent learns from demonstrations instead.
+    """
     overrides = list(set_ or [])
     overrides += [f"train.algo={algo}"] if algo else []
     overrides += [f"train.seed={seed}"] if seed is not None else []
@@ -214,6 +215,39 @@ def run(
     if (spec is None) == (resume is None):
         err.print("give a SPEC to start a run, or --resume RUN_DIR to continue one (not both)", markup=False)
         raise typer.Exit(code=2)
+    train_and_report(spec, overrides, resume, runs, progress, timesteps)
+
+
+@app.command()
+def irl(
+    spec: SpecArg,
+    demos: Annotated[Path | None, typer.Option(metavar="DIR", help="demonstrations (.npz); default: write "
+                                               "scripted-expert ones into the run")] = None,
+    algorithm: Annotated[str | None, typer.Option(help="gail, airl or bc (default: the spec's, else airl)")] = None,
+    generator: Annotated[str | None, typer.Option(help="PPO or SAC (shortcut for --set train.algo=...)")] = None,
+    set_: SetOpt = None,
+    seed: Annotated[int | None, typer.Option(help="shortcut for --set train.seed=...")] = None,
+    timesteps: Annotated[int | None, typer.Option(help="shortcut for --set train.timesteps=...")] = None,
+    runs: RunsOpt = Path("runs"),
+    progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
+) -> None:
+    """Learn a reward and a policy from demonstrations (GAIL, AIRL) or clone them (BC), then evaluate."""
+    overrides = list(set_ or [])
+    if algorithm is None and load_or_exit(spec, overrides).spec.irl.algorithm == "none":
+        algorithm = "airl"
+    overrides += [f"irl.algorithm={algorithm}"] if algorithm else []
+    overrides += [f"irl.demonstrations.path={demos}"] if demos is not None else []
+    overrides += [f"train.algo={generator}"] if generator else []
+    overrides += [f"train.seed={seed}"] if seed is not None else []
+    overrides += [f"train.timesteps={timesteps}"] if timesteps is not None else []
+    train_and_report(spec, overrides, None, runs, progress, timesteps)
+
+
+def train_and_report(spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool,
+                     timesteps: int | None) -> None:
+    """Start (or resume) a run, turn interruptions and bad input into messages, print the evaluation."""
+    from .runner import EvaluationInterrupted, RunInterrupted, resume_run, start_run
+
     try:
         if resume is not None:
             run_dir = resume_run(resume, out, progress, timesteps)

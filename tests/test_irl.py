@@ -1,4 +1,4 @@
-"""Adversarial IRL on PPO: rewards are relabelled, AIRL's r_psi is separable, spectral norm bounds layers."""
+"""Adversarial IRL: rewards are relabelled, AIRL's r_psi is separable, absorbing states, spectral norm."""
 
 import numpy as np
 import pytest
@@ -9,6 +9,8 @@ from fastrl.agents.expert import ScriptedExpert
 from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.data.replay import expert_transitions, rollout_trajectory
 from fastrl.irl import AdversarialCallback, Discriminator
+from fastrl.irl.discriminator import absorbing_states, augment
+from fastrl.irl.fitting import make_batch
 from fastrl.spec import load_spec
 
 from .conftest import spec_file
@@ -38,15 +40,32 @@ def test_rollout_rewards_are_replaced_by_the_discriminator(expert_data, kind):
     before = [p.detach().clone() for p in disc.parameters()]
     model.learn(256, callback=cb)
     assert any(not torch.equal(a, b) for a, b in zip(before, disc.parameters()))
-    assert {"irl/disc_loss", "irl/disc_accuracy", "irl/learned_reward_policy"} <= set(cb.stats)
+    assert {"irl/disc_loss", "irl/disc_accuracy", "irl/reward_policy", "irl/reward_expert"} <= set(cb.stats)
     buf = model.rollout_buffer
     env_rewards = np.stack(cb.env_rewards)
     assert not np.allclose(buf.rewards, env_rewards)
+    # the relabelled rewards are the discriminator's, plus gamma V(absorbing) where an episode terminated
+    n, e = buf.buffer_size, buf.n_envs
+    terminal = np.stack(cb.terminal)
+
+    def unswap(x):  # PPO's train() flattened the buffer env-major
+        return x.reshape(e, n, -1).swapaxes(0, 1).reshape(n * e, -1)
+
+    with torch.no_grad():
+        s = augment(torch.as_tensor(unswap(buf.observations)))
+        s2 = augment(torch.as_tensor(np.stack(cb.next_obs).reshape(n * e, -1)))
+        t = torch.as_tensor(terminal.reshape(-1))
+        lp = torch.as_tensor(unswap(buf.log_probs).reshape(-1))
+        expected = disc.generator_reward(s, s2, t, lp).numpy().reshape(n, e)
+    expected = expected + terminal * 0.99 * disc.absorbing_value()
+    truncated = np.abs(buf.rewards - expected) > 1e-4  # truncations keep SB3's bootstrap on top
+    assert truncated.mean() < 0.1
+    np.testing.assert_allclose(buf.rewards[~truncated], expected[~truncated], rtol=1e-4, atol=1e-4)
 
 
 def test_airl_reward_is_separable_from_the_shaping():
-    disc = Discriminator(6, "airl", 0.9)
-    s, s2 = torch.randn(32, 6), torch.randn(32, 6)
+    disc = Discriminator(6, "airl", 0.9, absorbing=False)
+    s, s2 = augment(torch.randn(32, 6)), augment(torch.randn(32, 6))
     term, log_pi = torch.zeros(32), torch.zeros(32)
     r, f = disc.reward(s).detach().clone(), disc.f(s, s2, term).detach().clone()
     with torch.no_grad():
@@ -63,12 +82,36 @@ def test_airl_reward_is_separable_from_the_shaping():
         Discriminator(6, "gail", 0.9).reward(s)
 
 
+def test_absorbing_states_keep_the_terminal_potential_and_value_the_end():
+    disc = Discriminator(6, "airl", 0.9, absorbing=True)
+    s, s2 = augment(torch.randn(4, 6)), augment(torch.randn(4, 6))
+    with torch.no_grad():
+        kept = disc.reward(s) + 0.9 * disc.potential(s2) - disc.potential(s)
+        assert torch.allclose(disc.f(s, s2, torch.ones(4)), kept)  # the episode goes on, absorbed
+        a = absorbing_states(1, 6)
+        r_abs = float(disc.f(a, a, torch.zeros(1))[0])
+    assert disc.absorbing_value() == pytest.approx(r_abs / (1 - 0.9), rel=1e-5)
+    assert torch.allclose(disc.terminal_bonus(torch.tensor([0.0, 1.0])), torch.tensor([0.0, 0.9 * r_abs / 0.1]))
+    assert Discriminator(6, "airl", 0.9, absorbing=False).absorbing_value() == 0.0
+
+
+def test_batches_get_one_absorbing_transition_per_terminated_episode():
+    obs, nxt = np.random.randn(10, 6), np.random.randn(10, 6)
+    term = np.zeros(10)
+    term[[3, 9]] = 1
+    batch = make_batch(obs, nxt, term, np.full(10, -1.0), absorbing=True)
+    assert len(batch) == 12 and batch.s.shape == (12, 7)
+    assert torch.equal(batch.s[10:, -1], torch.ones(2)) and torch.equal(batch.s[:10, -1], torch.zeros(10))
+    assert torch.equal(batch.log_pi[10:], torch.zeros(2))
+    assert len(make_batch(obs, nxt, term, np.zeros(10), absorbing=False)) == 10
+
+
 def layer_norms_after_training(spectral: bool) -> list[float]:
     """Largest singular value of each linear layer after pushing the logits up for 50 steps."""
     torch.manual_seed(0)
     disc = Discriminator(8, "gail", 0.99, hidden=(32, 32), spectral=spectral)
     optim = torch.optim.Adam(disc.parameters(), lr=1e-2)
-    x = torch.randn(256, 8) * 5
+    x = augment(torch.randn(256, 8) * 5)
     for _ in range(50):
         loss = -disc.logits(x, x, torch.zeros(256), torch.zeros(256)).abs().mean()
         optim.zero_grad()

@@ -36,18 +36,22 @@ class FreshInfoVecEnv(DummyVecEnv):
 
 
 def make_vec_env(spec: TaskSpec, n_envs: int, seed: int) -> VecEnv:
-    """Vectorised FastEnvs in one process (cheap envs step faster so), optionally normalised."""
+    """Vectorised FastEnvs in one process (cheap envs step faster so), optionally normalised.
+
+    Learning from demonstrations, env rewards are replaced by the discriminator's, so they are not normalised.
+    """
     venv = FreshInfoVecEnv([lambda: FastEnv(spec) for _ in range(n_envs)])
     venv.seed(seed)
     norm = spec.train.normalize
-    if norm.obs or norm.reward:
-        venv = VecNormalize(venv, norm_obs=norm.obs, norm_reward=norm.reward, gamma=spec.train.params().gamma)
+    norm_reward = norm.reward and not spec.irl.enabled
+    if norm.obs or norm_reward:
+        venv = VecNormalize(venv, norm_obs=norm.obs, norm_reward=norm_reward, gamma=spec.train.params().gamma)
     return venv
 
 
-def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None) -> BaseAlgorithm:
-    """The spec's algorithm with its hyperparameters on the vectorised env."""
-    params = spec.train.params().model_dump()
+def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) -> BaseAlgorithm:
+    """The spec's algorithm with its hyperparameters on the vectorised env (`extra`: more SB3 arguments)."""
+    params = {**spec.train.params().model_dump(), **{k: v for k, v in extra.items() if v is not None}}
     net, act = params.pop("net_arch"), ACTIVATIONS[params.pop("activation")]
     arch = {"pi": net, "vf": net} if spec.train.algo == "PPO" else {"pi": net, "qf": net}
     torch.set_num_threads(1)
@@ -65,8 +69,11 @@ def _optimizers(model: BaseAlgorithm) -> dict[str, torch.optim.Optimizer]:
     return {"policy": model.policy.optimizer}
 
 
-def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict) -> Path:
-    """Write weights and optimizer states (torch tensors only), normalisation stats (npz) and state (JSON)."""
+def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict, parts: dict | None = None) -> Path:
+    """Write weights and optimizer states (torch tensors only), normalisation stats (npz) and state (JSON).
+
+    `parts` are more objects with state_dict (a discriminator and its optimizer), saved in parts.pt.
+    """
     path.mkdir(parents=True, exist_ok=True)
     optimizers = {k: o.state_dict() for k, o in _optimizers(model).items()}
     tensors = {"policy": model.policy.state_dict(), "optimizers": optimizers}
@@ -75,6 +82,9 @@ def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict)
     tmp = path / "weights.pt.tmp"
     torch.save(tensors, tmp)
     tmp.replace(path / "weights.pt")
+    if parts:
+        torch.save({name: part.state_dict() for name, part in parts.items()}, path / "parts.pt.tmp")
+        (path / "parts.pt.tmp").replace(path / "parts.pt")
     if isinstance(venv, VecNormalize):
         np.savez(path / "normalize.npz", obs_mean=venv.obs_rms.mean, obs_var=venv.obs_rms.var,
                  obs_count=venv.obs_rms.count, ret_mean=venv.ret_rms.mean, ret_var=venv.ret_rms.var,
@@ -83,9 +93,13 @@ def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict)
     return path
 
 
-def load_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv | None) -> dict:
-    """Restore what save_checkpoint wrote into a freshly built model (and its VecNormalize)."""
+def load_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv | None, parts: dict | None = None) -> dict:
+    """Restore what save_checkpoint wrote into a freshly built model (and its VecNormalize, and parts)."""
     tensors = torch.load(path / "weights.pt", map_location="cpu", weights_only=True)
+    if parts:
+        saved = torch.load(path / "parts.pt", map_location="cpu", weights_only=True)
+        for name, part in parts.items():
+            part.load_state_dict(saved[name])
     model.policy.load_state_dict(tensors["policy"])
     for name, opt in _optimizers(model).items():
         opt.load_state_dict(tensors["optimizers"][name])

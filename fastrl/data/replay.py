@@ -6,7 +6,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..irl.adversarial import Transitions
+from ..irl.fitting import Transitions
 from ..spec import spec_hash
 from .trajectory import Trajectory
 

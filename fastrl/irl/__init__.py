@@ -1,6 +1,9 @@
-"""Inverse RL on stable-baselines3: GAIL and AIRL discriminators and the on-policy adversarial loop."""
+"""Inverse RL on stable-baselines3: GAIL and AIRL discriminators, on-policy (PPO) and off-policy (SAC) loops."""
 
-from .adversarial import AdversarialCallback, Transitions
+from .adversarial import AdversarialCallback
 from .discriminator import Discriminator
+from .fitting import DiscriminatorFit, Transitions
+from .offpolicy import OffPolicyAdversarialCallback, RelabelingReplayBuffer
 
-__all__ = ["AdversarialCallback", "Discriminator", "Transitions"]
+__all__ = ["AdversarialCallback", "Discriminator", "DiscriminatorFit", "OffPolicyAdversarialCallback",
+           "RelabelingReplayBuffer", "Transitions"]

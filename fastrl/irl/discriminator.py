@@ -1,4 +1,9 @@
-"""Adversarial discriminators: GAIL, and AIRL with the shaped form f = r_psi(s) + gamma h(s') - h(s)."""
+"""Adversarial discriminators: GAIL, and AIRL with the shaped form f = r_psi(s) + gamma h(s') - h(s).
+
+Inputs carry one extra column, the absorbing flag: an episode that terminates (the task is done) continues
+in an absorbing state forever, so demonstrations and rollouts of different lengths are compared fairly
+(Kostrikov et al., "Discriminator-Actor-Critic"). Truncated episodes are bootstrapped by the generator.
+"""
 
 from __future__ import annotations
 
@@ -19,37 +24,75 @@ def mlp(inp: int, hidden: tuple[int, ...], out: int = 1, sn: bool = False) -> nn
     return nn.Sequential(*layers[:-1])
 
 
+def augment(obs: torch.Tensor) -> torch.Tensor:
+    """Observations with a zero absorbing flag appended."""
+    return torch.cat([obs, torch.zeros_like(obs[..., :1])], dim=-1)
+
+
+def absorbing_states(k: int, obs_dim: int) -> torch.Tensor:
+    """k absorbing states: zero observation, flag 1."""
+    s = torch.zeros(k, obs_dim + 1)
+    s[:, -1] = 1.0
+    return s
+
+
 class Discriminator(nn.Module):
-    """Logits of 'expert' for transitions (s, s', done, log pi(a|s)); state-only rewards."""
+    """Logits of 'expert' for transitions (s, s', terminal, log pi(a|s)) of augmented states; state-only rewards."""
 
     def __init__(self, obs_dim: int, kind: Literal["gail", "airl"], gamma: float, hidden=(64, 64),
-                 spectral: bool = False):
+                 spectral: bool = False, absorbing: bool = True):
         super().__init__()
-        self.kind, self.gamma = kind, gamma
+        self.obs_dim, self.kind, self.gamma = obs_dim, kind, gamma
+        self.hidden, self.spectral, self.absorbing = tuple(hidden), spectral, absorbing
+        width = obs_dim + 1
         if kind == "airl":
-            self.r_psi = mlp(obs_dim, hidden, sn=spectral)   # the reward kept for scoring
-            self.h = mlp(obs_dim, hidden, sn=spectral)       # the shaping potential
+            self.r_psi = mlp(width, self.hidden, sn=spectral)   # the reward kept for scoring
+            self.h = mlp(width, self.hidden, sn=spectral)       # the shaping potential
         else:
-            self.net = mlp(2 * obs_dim, hidden, sn=spectral)
+            self.net = mlp(2 * width, self.hidden, sn=spectral)
 
-    def f(self, obs, next_obs, terminal):
-        """AIRL's shaped term r_psi(s) + gamma (1 - terminal) h(s') - h(s); the terminal potential is 0."""
-        r = self.r_psi(obs).squeeze(-1)
-        return r + self.gamma * (1.0 - terminal) * self.h(next_obs).squeeze(-1) - self.h(obs).squeeze(-1)
+    def f(self, s, s2, terminal):
+        """AIRL's shaped term r_psi(s) + gamma h(s') - h(s); without absorbing states the terminal potential is 0."""
+        keep = 1.0 if self.absorbing else 1.0 - terminal
+        return self.r_psi(s).squeeze(-1) + self.gamma * keep * self.h(s2).squeeze(-1) - self.h(s).squeeze(-1)
 
-    def logits(self, obs, next_obs, terminal, log_pi):
+    def logits(self, s, s2, terminal, log_pi):
         """log D - log(1 - D): AIRL's f - log pi, or GAIL's network output."""
         if self.kind == "airl":
-            return self.f(obs, next_obs, terminal) - log_pi
-        return self.net(torch.cat([obs, next_obs], dim=-1)).squeeze(-1)
+            return self.f(s, s2, terminal) - log_pi
+        return self.net(torch.cat([s, s2], dim=-1)).squeeze(-1)
 
-    def generator_reward(self, obs, next_obs, terminal, log_pi):
-        """What the policy maximises: AIRL log D - log(1-D); GAIL -log(1 - D)."""
-        z = self.logits(obs, next_obs, terminal, log_pi)
+    def generator_reward(self, s, s2, terminal, log_pi, entropy: bool = True):
+        """What the generator maximises: AIRL log D - log(1 - D) (no -log pi unless `entropy`); GAIL -log(1 - D)."""
+        z = self.logits(s, s2, terminal, log_pi if entropy else torch.zeros_like(log_pi))
         return z if self.kind == "airl" else nn.functional.softplus(z)
 
-    def reward(self, obs):
-        """The learned state reward r_psi(s) (AIRL only), separate from the shaping."""
+    def absorbing_value(self) -> float:
+        """Discounted value of staying absorbed forever, r(abs, abs) / (1 - gamma); 0 without absorbing states."""
+        if not self.absorbing:
+            return 0.0
+        s = absorbing_states(1, self.obs_dim)
+        with torch.no_grad():
+            r = float(self.generator_reward(s, s, torch.zeros(1), torch.zeros(1))[0])
+        return r / max(1.0 - self.gamma, 1e-3)
+
+    def terminal_bonus(self, terminal: torch.Tensor) -> torch.Tensor:
+        """What a terminated transition adds to the generator's reward: gamma V(absorbing)."""
+        return terminal * self.gamma * self.absorbing_value()
+
+    def reward(self, s):
+        """The learned state reward r_psi(s) (AIRL only) of augmented states, separate from the shaping."""
         if self.kind != "airl":
             raise ValueError("only AIRL has a separable reward r_psi")
-        return self.r_psi(obs).squeeze(-1)
+        return self.r_psi(s).squeeze(-1)
+
+    def potential(self, s):
+        """AIRL's shaping potential h(s) of augmented states."""
+        if self.kind != "airl":
+            raise ValueError("only AIRL has a shaping potential h")
+        return self.h(s).squeeze(-1)
+
+    def config(self) -> dict:
+        """What rebuilds this discriminator (for pickle-free saving)."""
+        return {"obs_dim": self.obs_dim, "kind": self.kind, "gamma": self.gamma, "hidden": list(self.hidden),
+                "spectral": self.spectral, "absorbing": self.absorbing}

@@ -10,17 +10,18 @@ from ..agents.expert import ScriptedExpert
 from ..data.replay import rollout_trajectory
 from ..env.fast_env import FastEnv
 from ..spec import load_spec
-from .run import load_policy
+from ..spec.models import TaskSpec
+from .saved import load_policy
 
 
-def write_demos(out: Path, n: int, seed: int = 0, run: Path | None = None, expert_spec: Path | None = None,
+def write_demos(out: Path, n: int, seed: int = 0, run: Path | None = None, expert_spec: Path | TaskSpec | None = None,
                 overrides=(), progress: bool = True) -> list[Path]:
-    """Write n trajectories (seeds seed..seed+n-1) from a run's policy or the scripted expert."""
+    """Write n trajectories (seeds seed..seed+n-1) from a run's policy or the scripted expert (spec or its file)."""
     if run is not None:
         spec, policy = load_policy(run)
         env, on_reset, meta = FastEnv(spec), None, {"source": "agent", "subject": Path(run).name}
     else:
-        spec = load_spec(expert_spec, overrides)
+        spec = expert_spec if isinstance(expert_spec, TaskSpec) else load_spec(expert_spec, overrides)
         env = FastEnv(spec)
         expert = ScriptedExpert(env)
         policy, on_reset, meta = expert.act, expert.reset, {"source": "expert", "subject": "scripted-expert"}

@@ -7,6 +7,7 @@ import math
 import shutil
 import time
 from collections import deque
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -16,17 +17,26 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 from ..agents.sb3 import save_checkpoint
 
-KEEP_CHECKPOINTS = 3
-
 
 class TrainingMonitor(BaseCallback):
-    """Collects per-episode figures from env infos and logs them every `log_every` timesteps."""
+    """Collects per-episode figures from env infos and logs them every `log_every` timesteps.
+
+    Optionally it adds `stats()` (e.g. the discriminator's) to every point, saves `parts` (objects with
+    state_dict) in checkpoints, and every `eval_every` steps runs `evaluator()`, stopping training when the
+    evaluation's subtask share reaches `stop_at`.
+    """
 
     def __init__(self, run: Path, feature_names: list[str], total: int, log_every: int, checkpoint_every: int,
-                 recorder=None, progress: bool = True):
+                 recorder=None, progress: bool = True, keep_checkpoints: int = 3,
+                 stats: Callable[[], dict] | None = None, parts: dict | None = None,
+                 evaluator: Callable[[], dict] | None = None, eval_every: int = 0, stop_at: float | None = None):
         super().__init__()
         self.run, self.names, self.total = run, feature_names, total
-        self.log_every, self.checkpoint_every = log_every, checkpoint_every
+        self.log_every, self.checkpoint_every, self.keep = log_every, checkpoint_every, keep_checkpoints
+        self.stats, self.parts = stats, parts or {}
+        self.evaluator, self.eval_every, self.stop_at = evaluator, eval_every, stop_at
+        self.next_eval = 0
+        self.stopped_early = False
         self.recorder = recorder
         self.recent = deque(maxlen=100)
         self.window: list[dict] = []
@@ -46,6 +56,7 @@ class TrainingMonitor(BaseCallback):
         self.started = time.perf_counter()
         self.next_log = self.num_timesteps + self.log_every
         self.next_ckpt = self.num_timesteps + self.checkpoint_every
+        self.next_eval = self.num_timesteps + self.eval_every
         self.progress.start()
         self.task_id = self.progress.add_task("training", total=self.total, completed=self.num_timesteps,
                                               rate="-", status="")
@@ -67,12 +78,21 @@ class TrainingMonitor(BaseCallback):
         if self.num_timesteps >= self.next_tick:
             self.next_tick += 2048
             self.progress.update(self.task_id, completed=self.num_timesteps, rate=f"{self.rate():.0f}")
-        if self.num_timesteps >= self.next_log:
-            self.log_point()
-            self.next_log += self.log_every
+        evaluation = {}
+        if self.evaluator is not None and self.eval_every and self.num_timesteps >= self.next_eval:
+            self.progress.update(self.task_id, status="evaluating")
+            evaluation = self.evaluator()
+            self.next_eval += self.eval_every
+        if self.num_timesteps >= self.next_log or evaluation:
+            self.log_point(evaluation)
+            while self.next_log <= self.num_timesteps:
+                self.next_log += self.log_every
         if self.num_timesteps >= self.next_ckpt:
             self.checkpoint()
             self.next_ckpt += self.checkpoint_every
+        if self.stop_at is not None and evaluation.get("eval/subtasks", 0.0) >= self.stop_at:
+            self.stopped_early = True
+            return False
         return True
 
     def _on_training_end(self) -> None:
@@ -82,10 +102,12 @@ class TrainingMonitor(BaseCallback):
         """Training steps per second in this session."""
         return (self.num_timesteps - self.start_steps) / max(1e-9, time.perf_counter() - self.started)
 
-    def log_point(self) -> dict:
-        """Aggregate the episodes since the last point, add losses, write and send them."""
+    def log_point(self, evaluation: dict | None = None) -> dict:
+        """Aggregate the episodes since the last point, add losses and extra stats, write and send them."""
         eps = self.window or list(self.recent)[-10:]
-        m: dict[str, float] = {"fps": self.rate(), "episodes": float(self.episodes)}
+        m: dict[str, float] = {"fps": self.rate(), "episodes": float(self.episodes), **(evaluation or {})}
+        if self.stats is not None:
+            m.update({k: float(v) for k, v in self.stats().items() if math.isfinite(v)})
         if eps:
             m.update({"episode/return": float(np.mean([e["return"] for e in eps])),
                       "episode/success_rate": float(np.mean([e["success"] for e in eps])),
@@ -108,8 +130,8 @@ class TrainingMonitor(BaseCallback):
     def checkpoint(self) -> Path:
         """Save a checkpoint and keep only the newest few."""
         path = save_checkpoint(self.run / "checkpoints" / f"{self.num_timesteps:010d}", self.model,
-                               self.training_env, {"episodes": self.episodes})
-        old = sorted((self.run / "checkpoints").glob("[0-9]*"))[:-KEEP_CHECKPOINTS]
+                               self.training_env, {"episodes": self.episodes}, self.parts)
+        old = sorted((self.run / "checkpoints").glob("[0-9]*"))[:-self.keep]
         for p in old:
             shutil.rmtree(p, ignore_errors=True)
         return path

@@ -10,15 +10,18 @@ import numpy as np
 from rich.console import Console
 
 from ..agents.expert import ScriptedExpert
-from ..agents.sb3 import build_model, load_checkpoint, make_vec_env, policy_function, save_checkpoint
+from ..agents.sb3 import load_checkpoint, policy_function, save_checkpoint
 from ..env.fast_env import FastEnv
+from ..irl.export import save_networks
 from ..log import RunRecorder
 from ..model.compiler import CompiledTask, compile_task
 from ..spec import load_spec
 from ..spec.models import TaskSpec
 from .evaluate import evaluate
+from .learner import build_learner
 from .monitor import TrainingMonitor
 from .rundir import latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
+from .saved import load_policy
 
 
 class RunInterrupted(Exception):
@@ -84,33 +87,37 @@ def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resuming: bool
 def _train_and_evaluate(run: Path, spec: TaskSpec, task: CompiledTask, ckpt: Path | None, console: Console,
                         progress: bool) -> Path:
     """Train (from a checkpoint if given), save, evaluate agent and expert, write eval.json and the recording."""
-    venv = make_vec_env(spec, spec.train.n_envs, spec.train.seed)
-    model = build_model(spec, venv)
-    before = load_checkpoint(ckpt, model, venv) if ckpt else {}
+    learner = build_learner(spec, run, console, progress)
+    model, venv = learner.model, learner.venv
+    before = load_checkpoint(ckpt, model, venv, learner.parts) if ckpt else {}
     recorder = _open_recorder(run, spec, task, resuming=ckpt is not None)
     try:
+        ev = spec.evaluate
         monitor = TrainingMonitor(run, list(spec.reward.features), spec.train.timesteps, spec.train.log_every,
-                                  spec.train.checkpoint_every, recorder, progress)
+                                  spec.train.checkpoint_every, recorder, progress, spec.train.keep_checkpoints,
+                                  learner.stats, learner.parts, periodic_evaluator(spec, model, venv),
+                                  ev.periodic_every, ev.stop_at_subtasks)
         monitor.episodes = before.get("episodes", 0)
         seconds = before.get("train_seconds", 0.0)
         remaining = spec.train.timesteps - model.num_timesteps
         t0 = time.perf_counter()
         try:
             if remaining > 0:
-                model.learn(remaining, callback=monitor, reset_num_timesteps=False)
+                learner.learn(remaining, monitor)
         except KeyboardInterrupt:
             monitor.progress.stop()
             seconds += time.perf_counter() - t0
             save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv,
-                            {"episodes": monitor.episodes, "train_seconds": seconds})
+                            {"episodes": monitor.episodes, "train_seconds": seconds}, learner.parts)
             update_meta(run, status="interrupted", trained_timesteps=int(model.num_timesteps), train_seconds=seconds)
             raise RunInterrupted(run, int(model.num_timesteps)) from None
         seconds += time.perf_counter() - t0
-        state = {"episodes": monitor.episodes, "train_seconds": seconds}
-        save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state)
-        save_checkpoint(run / "final", model, venv, state)
+        state = {"episodes": monitor.episodes, "train_seconds": seconds, "stopped_early": monitor.stopped_early}
+        save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state, learner.parts)
+        save_checkpoint(run / "final", model, venv, state, learner.parts)
+        save_networks(run / "networks", model, venv, learner.disc, spec.train.params().gamma)
         update_meta(run, status="evaluating", trained_timesteps=int(model.num_timesteps), train_seconds=seconds,
-                    train_fps=model.num_timesteps / max(seconds, 1e-9))
+                    train_fps=model.num_timesteps / max(seconds, 1e-9), stopped_early=monitor.stopped_early)
         try:
             results = evaluate_run(spec, policy_function(model, venv), recorder, console)
         except KeyboardInterrupt:
@@ -122,6 +129,21 @@ def _train_and_evaluate(run: Path, spec: TaskSpec, task: CompiledTask, ckpt: Pat
     finally:
         recorder.close()
     return run
+
+
+def periodic_evaluator(spec: TaskSpec, model, venv):
+    """Deterministic evaluation of the current policy on the first evaluation seeds, as curve points."""
+    if not spec.evaluate.periodic_every:
+        return None
+    env = FastEnv(spec)
+    seeds = [spec.evaluate.seed + i for i in range(spec.evaluate.periodic_episodes)]
+
+    def run_evaluation() -> dict[str, float]:
+        summary, _ = evaluate(env, policy_function(model, venv), seeds)
+        return {"eval/success_rate": summary["success_rate"], "eval/subtasks": summary["subtasks_completed"],
+                "eval/return": summary["return_mean"], "eval/episode_time": summary["episode_time_mean"]}
+
+    return run_evaluation
 
 
 def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: Console | None) -> dict:
@@ -144,22 +166,6 @@ def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: 
     out["eval_seconds"] = time.perf_counter() - t0
     env.close()
     return out
-
-
-def load_policy(run: Path) -> tuple[TaskSpec, object]:
-    """A saved run's spec and its final (or newest) policy as obs -> action."""
-    run = Path(run)
-    if not (run / "spec.yaml").exists():
-        raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
-    spec = load_spec(run / "spec.yaml")
-    weights = run / "final" if (run / "final" / "weights.pt").exists() else latest_checkpoint(run)
-    if weights is None:
-        raise FileNotFoundError(f"{run} has no saved policy")
-    venv = make_vec_env(spec, 1, spec.train.seed)
-    model = build_model(spec, venv)
-    load_checkpoint(weights, model, venv)
-    venv.training = False
-    return spec, policy_function(model, venv)
 
 
 def evaluate_saved(run: Path, episodes: int | None = None) -> dict:

@@ -19,9 +19,11 @@ PACKAGES = ("fastrl", "mujoco", "gymnasium", "stable-baselines3", "torch", "nump
 
 
 def new_run_dir(root: Path, spec: TaskSpec) -> Path:
-    """runs/<spec name>/<UTC timestamp>-<algo>-s<seed>/, made unique if it exists."""
+    """runs/<spec name>/<UTC timestamp>-<algo>-s<seed>/ (algo e.g. ppo, airl-ppo, bc), made unique if it exists."""
     stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
-    base = Path(root) / spec.name / f"{stamp}-{spec.train.algo.lower()}-s{spec.train.seed}"
+    algo = spec.train.algo.lower() if not spec.irl.enabled else (
+        "bc" if spec.irl.algorithm == "bc" else f"{spec.irl.algorithm}-{spec.train.algo.lower()}")
+    base = Path(root) / spec.name / f"{stamp}-{algo}-s{spec.train.seed}"
     path, k = base, 1
     while path.exists():
         k += 1

@@ -11,6 +11,7 @@ from pydantic_core import InitErrorDetails, PydanticCustomError
 
 from ..terms import OBSERVATION_TERMS, REWARD_FEATURES
 from . import geometry as geo
+from .irl import IRL
 from .training import Evaluate, Train
 
 
@@ -241,7 +242,7 @@ class Reward(Strict):
 
 
 class TaskSpec(Strict):
-    """A whole task: scene, scope, task, episode, actions, observation, reward, train, evaluate."""
+    """A whole task: scene, scope, task, episode, actions, observation, reward, train, irl, evaluate."""
 
     name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$")
     description: str = ""
@@ -253,12 +254,15 @@ class TaskSpec(Strict):
     observation: Observation = Observation()
     reward: Reward
     train: Train = Train()
+    irl: IRL = IRL()
     evaluate: Evaluate = Evaluate()
 
     @model_validator(mode="after")
     def _reachable(self):
         if self.train.algo == "SAC" and self.actions.mode != "continuous":
             _fail("train.algo", "SAC needs continuous actions: set actions.mode: continuous")
+        if self.irl.algorithm == "bc" and self.train.algo != "PPO":
+            _fail("irl.algorithm", "behavioural cloning trains the PPO policy: set train.algo: PPO")
         names = [p.name for p in self.scene.portals]
         if self.scope.portal not in names:
             _fail("scope.portal", f"no portal named '{self.scope.portal}' (portals: {', '.join(names)})")

@@ -70,6 +70,7 @@ class Train(BaseModel):
     normalize: Normalize = Normalize()
     checkpoint_every: int = Field(100_000, ge=1, description="timesteps between checkpoints")
     log_every: int = Field(10_000, ge=1, description="timesteps between training-curve points")
+    keep_checkpoints: int = Field(3, ge=1, description="how many of the newest checkpoints to keep")
 
     def params(self) -> Params:
         """The hyperparameters of the chosen algorithm."""
@@ -86,3 +87,8 @@ class Evaluate(BaseModel):
     image_size: tuple[int, int] = Field((128, 128), description="width, height of logged endoscope images")
     record_episodes: int = Field(20, ge=0, description="how many evaluation episodes go into the recording")
     expert: bool = Field(True, description="also evaluate the scripted expert on the same seeds, for reference")
+    periodic_every: int = Field(0, ge=0, description="timesteps between evaluations during training (0: none)")
+    periodic_episodes: int = Field(10, ge=1, description="deterministic episodes per evaluation during training")
+    stop_at_subtasks: float | None = Field(None, gt=0, le=1,
+                                           description="stop training once an evaluation during training "
+                                                       "completes this share of subtasks")

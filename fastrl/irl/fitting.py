@@ -1,0 +1,108 @@
+"""Discriminator batches (with absorbing transitions) and the binary cross-entropy fit: expert 1, policy 0."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from .discriminator import Discriminator, absorbing_states, augment
+
+
+@dataclass
+class Transitions:
+    """Expert transitions (raw observations) with the actions that produced them."""
+
+    obs: np.ndarray
+    next_obs: np.ndarray
+    terminal: np.ndarray
+    actions: np.ndarray
+
+
+@dataclass
+class Batch:
+    """Discriminator inputs: augmented states s, s', terminal flags and log pi(a|s)."""
+
+    s: torch.Tensor
+    s2: torch.Tensor
+    terminal: torch.Tensor
+    log_pi: torch.Tensor
+
+    def __len__(self) -> int:
+        return len(self.s)
+
+    def take(self, idx) -> Batch:
+        """The rows idx."""
+        return Batch(self.s[idx], self.s2[idx], self.terminal[idx], self.log_pi[idx])
+
+
+def make_batch(obs, next_obs, terminal, log_pi, absorbing: bool) -> Batch:
+    """Tensors of (normalised) observations, plus one absorbing transition per terminated one."""
+    s, s2 = augment(torch.as_tensor(obs, dtype=torch.float32)), augment(torch.as_tensor(next_obs, dtype=torch.float32))
+    term = torch.as_tensor(terminal, dtype=torch.float32).reshape(-1)
+    log_pi = torch.as_tensor(log_pi, dtype=torch.float32).reshape(-1)
+    k = int(term.sum()) if absorbing else 0
+    if k:
+        a = absorbing_states(k, s.shape[1] - 1)
+        s, s2 = torch.cat([s, a]), torch.cat([s2, a])
+        term, log_pi = torch.cat([term, torch.zeros(k)]), torch.cat([log_pi, torch.zeros(k)])
+    return Batch(s, s2, term, log_pi)
+
+
+class DiscriminatorFit:
+    """Adam on binary cross-entropy, minibatches of policy rows each paired with as many expert rows."""
+
+    def __init__(self, disc: Discriminator, lr: float = 3e-4, batch_size: int = 256, seed: int = 0):
+        self.disc, self.batch_size = disc, batch_size
+        self.optim = torch.optim.Adam(disc.parameters(), lr=lr)
+        self.rng = np.random.default_rng(seed)
+
+    def epochs(self, policy: Batch, expert: Batch, epochs: int) -> dict[str, float]:
+        """Passes over the policy rows; return mean loss, accuracy, and logits on both sides."""
+        n_batches = max(1, len(policy) // self.batch_size)
+        batches = [idx for _ in range(epochs) for idx in np.array_split(self.rng.permutation(len(policy)), n_batches)]
+        return self._fit(policy, expert, batches)
+
+    def steps(self, policy: Batch, expert: Batch, steps: int) -> dict[str, float]:
+        """Gradient steps on minibatches drawn with replacement from the policy rows."""
+        size = min(self.batch_size, len(policy))
+        return self._fit(policy, expert, [self.rng.integers(0, len(policy), size) for _ in range(steps)])
+
+    def _fit(self, policy: Batch, expert: Batch, batches: list[np.ndarray]) -> dict[str, float]:
+        bce = torch.nn.functional.binary_cross_entropy_with_logits
+        losses, accs, z_p, z_e = [], [], [], []
+        for idx in batches:
+            p, e = policy.take(idx), expert.take(self.rng.integers(0, len(expert), len(idx)))
+            zp = self.disc.logits(p.s, p.s2, p.terminal, p.log_pi)
+            ze = self.disc.logits(e.s, e.s2, e.terminal, e.log_pi)
+            loss = bce(zp, torch.zeros_like(zp)) + bce(ze, torch.ones_like(ze))
+            self.optim.zero_grad()
+            loss.backward()
+            self.optim.step()
+            losses.append(float(loss.detach()))
+            accs.append(0.5 * float((zp < 0).float().mean() + (ze > 0).float().mean()))
+            z_p.append(float(zp.detach().mean()))
+            z_e.append(float(ze.detach().mean()))
+        return {"irl/disc_loss": float(np.mean(losses)), "irl/disc_accuracy": float(np.mean(accs)),
+                "irl/logit_policy": float(np.mean(z_p)), "irl/logit_expert": float(np.mean(z_e))}
+
+    def reward_stats(self, policy: Batch, expert: Batch) -> dict[str, float]:
+        """Mean learned reward (r_psi for AIRL, the logit for GAIL) on policy and expert rows."""
+        with torch.no_grad():
+            if self.disc.kind == "airl":
+                rp, re = self.disc.reward(policy.s), self.disc.reward(expert.s)
+            else:
+                rp = self.disc.logits(policy.s, policy.s2, policy.terminal, policy.log_pi)
+                re = self.disc.logits(expert.s, expert.s2, expert.terminal, expert.log_pi)
+        return {"irl/reward_policy": float(rp.mean()), "irl/reward_expert": float(re.mean()),
+                "irl/absorbing_value": self.disc.absorbing_value()}
+
+    def state_dict(self) -> dict:
+        """Discriminator and optimizer tensors, for checkpoints."""
+        return {"disc": self.disc.state_dict(), "optim": self.optim.state_dict()}
+
+    def load_state_dict(self, state: dict) -> None:
+        """Restore what state_dict gave."""
+        self.disc.load_state_dict(state["disc"])
+        self.optim.load_state_dict(state["optim"])

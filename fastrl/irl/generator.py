@@ -1,0 +1,38 @@
+"""What the discriminator needs from a stable-baselines3 generator: normalised observations and log pi(a|s)."""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from stable_baselines3 import SAC
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.vec_env import VecNormalize
+
+from .fitting import Batch, Transitions, make_batch
+
+
+def normalize_obs(model: BaseAlgorithm, obs: np.ndarray) -> np.ndarray:
+    """Observations as the policy sees them (the training env's running normalisation, if any)."""
+    env = model.get_env()
+    return env.normalize_obs(obs) if isinstance(env, VecNormalize) else obs
+
+
+def log_prob(model: BaseAlgorithm, obs: torch.Tensor, actions: torch.Tensor) -> torch.Tensor:
+    """log pi(a|s) of given actions under the current policy (SAC: the squashed Gaussian), without gradients."""
+    with torch.no_grad():
+        if isinstance(model, SAC):
+            mean, log_std, _ = model.actor.get_action_dist_params(obs)
+            dist = model.actor.action_dist.proba_distribution(mean, log_std)
+            return dist.log_prob(actions.clamp(-1.0 + 1e-6, 1.0 - 1e-6))
+        if model.action_space.shape == ():  # Discrete: integer actions
+            actions = actions.reshape(-1).long()
+        _, lp, _ = model.policy.evaluate_actions(obs, actions)
+        return lp
+
+
+def expert_batch(model: BaseAlgorithm, expert: Transitions, absorbing: bool) -> Batch:
+    """The demonstrations as a discriminator batch, under the current normalisation and policy."""
+    obs = torch.as_tensor(normalize_obs(model, expert.obs), dtype=torch.float32)
+    nxt = normalize_obs(model, expert.next_obs)
+    lp = log_prob(model, obs, torch.as_tensor(expert.actions, dtype=torch.float32))
+    return make_batch(obs, nxt, expert.terminal, lp, absorbing)

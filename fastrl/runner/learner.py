@@ -1,0 +1,118 @@
+"""What a run trains: forward RL on the spec's reward, or GAIL / AIRL / behavioural cloning from demonstrations."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from rich.console import Console
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.vec_env import VecEnv
+
+from ..agents.bc import behaviour_clone
+from ..agents.sb3 import build_model, make_vec_env
+from ..data.replay import demonstration_pairs, expert_transitions
+from ..data.trajectory import Trajectory, load_trajectories
+from ..env.fast_env import FastEnv
+from ..irl import AdversarialCallback, Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
+from ..spec.models import TaskSpec
+from .demos import write_demos
+
+
+@dataclass
+class Learner:
+    """A model on its vectorised env, the callbacks that make it learn from demonstrations, and their state."""
+
+    spec: TaskSpec
+    venv: VecEnv
+    model: BaseAlgorithm
+    callbacks: list[BaseCallback] = field(default_factory=list)
+    disc: Discriminator | None = None
+    demos: list[Trajectory] = field(default_factory=list)
+
+    @property
+    def parts(self) -> dict:
+        """Extra trainable state saved in checkpoints (the discriminator and its optimizer)."""
+        return {"discriminator": self.callbacks[0].fit} if self.callbacks else {}
+
+    def stats(self) -> dict[str, float]:
+        """The latest discriminator statistics, for the training curves."""
+        return dict(self.callbacks[0].stats) if self.callbacks else {}
+
+    def learn(self, timesteps: int, monitor: BaseCallback) -> None:
+        """Train for `timesteps` more steps (behavioural cloning: fit the demonstrations once)."""
+        if self.spec.irl.algorithm == "bc":
+            if self.model.num_timesteps == 0:
+                bc = self.spec.irl.bc
+                obs, actions = demonstration_pairs(FastEnv(self.spec), self.demos)
+                behaviour_clone(self.model, self.venv, obs, actions, bc.epochs, bc.batch_size, bc.learning_rate,
+                                self.spec.train.seed)
+            return
+        self.model.learn(timesteps, callback=[*self.callbacks, monitor], reset_num_timesteps=False)
+
+
+def demonstrations(spec: TaskSpec, run: Path, console: Console, progress: bool) -> list[Trajectory]:
+    """The spec's demonstrations: its directory of trajectories, or scripted-expert ones written into the run."""
+    cfg = spec.irl.demonstrations
+    if cfg.path is not None:
+        folder = Path(cfg.path)
+        if not folder.exists():
+            raise FileNotFoundError(f"irl.demonstrations.path: {folder} does not exist")
+    else:
+        folder = run / "demos"
+        if len(list(folder.glob("*.npz"))) < cfg.expert:
+            write_demos(folder, cfg.expert, cfg.seed, expert_spec=spec, progress=progress)
+    trajs, errors = load_trajectories([folder])
+    mode = spec.actions.mode
+    usable = []
+    for traj in trajs:
+        problem = action_problem(traj, mode)
+        if problem:
+            errors.append(f"trajectory of {traj.meta.get('subject', '?')} seed {traj.meta.get('seed', '?')}: {problem}")
+        else:
+            usable.append(traj)
+    for message in errors:
+        console.print(f"[yellow]skipped[/yellow] {message}", markup=False, highlight=False)
+    if not usable:
+        raise FileNotFoundError(f"no usable demonstrations (with actions) in {folder}")
+    return usable
+
+
+def action_problem(traj: Trajectory, mode: str) -> str | None:
+    """Why a trajectory's actions cannot be learned from in this action mode, or None."""
+    if traj.actions is None:
+        return "has no actions"
+    a = np.asarray(traj.actions)
+    if mode == "discrete" and a.ndim != 1:
+        return f"has continuous actions {a.shape}, the spec's actions are discrete"
+    if mode == "continuous" and (a.ndim != 2 or a.shape[1] != 7):
+        return f"has discrete actions {a.shape}, the spec's actions are continuous (7 per step)"
+    return None
+
+
+def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = True) -> Learner:
+    """The model (and, learning from demonstrations, the discriminator and its callback) for a run."""
+    venv = make_vec_env(spec, spec.train.n_envs, spec.train.seed)
+    irl = spec.irl
+    if irl.algorithm in ("none", "bc"):
+        learner = Learner(spec, venv, build_model(spec, venv))
+        if irl.algorithm == "bc":
+            learner.demos = demonstrations(spec, run, console, progress)
+        return learner
+    off_policy = spec.train.algo == "SAC"
+    model = build_model(spec, venv, replay_buffer_class=RelabelingReplayBuffer if off_policy else None)
+    demos = demonstrations(spec, run, console, progress)
+    d = irl.discriminator
+    obs_dim = venv.observation_space.shape[0]
+    disc = Discriminator(obs_dim, irl.algorithm, spec.train.params().gamma, tuple(d.hidden), d.spectral_norm,
+                         d.absorbing)
+    transitions = expert_transitions(FastEnv(spec), demos)
+    if off_policy:
+        cb = OffPolicyAdversarialCallback(disc, transitions, d.current_rollout, d.steps, d.batch_size,
+                                          d.learning_rate, spec.train.seed)
+    else:
+        cb = AdversarialCallback(disc, transitions, d.epochs, d.batch_size, d.learning_rate, spec.train.seed,
+                                 d.entropy)
+    return Learner(spec, venv, model, [cb], disc, demos)

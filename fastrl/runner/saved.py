@@ -1,0 +1,31 @@
+"""Load what a finished (or interrupted) run saved: its spec and policy."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..agents.sb3 import build_model, load_checkpoint, make_vec_env, policy_function
+from ..spec import load_spec
+from ..spec.models import TaskSpec
+from .rundir import latest_checkpoint
+
+
+def load_policy(run: Path) -> tuple[TaskSpec, object]:
+    """A saved run's spec and its final (or newest) policy as obs -> action."""
+    run = Path(run)
+    if not (run / "spec.yaml").exists():
+        raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
+    spec = load_spec(run / "spec.yaml")
+    weights = run / "final" if (run / "final" / "weights.pt").exists() else latest_checkpoint(run)
+    if weights is None:
+        raise FileNotFoundError(f"{run} has no saved policy")
+    return spec, checkpoint_policy(spec, weights)
+
+
+def checkpoint_policy(spec: TaskSpec, checkpoint: Path):
+    """The deterministic policy (obs -> action) saved in one checkpoint directory."""
+    venv = make_vec_env(spec, 1, spec.train.seed)
+    model = build_model(spec, venv)
+    load_checkpoint(checkpoint, model, venv)
+    venv.training = False
+    return policy_function(model, venv)

@@ -1,0 +1,57 @@
+"""The irl section: learn from demonstrations (GAIL, AIRL, behavioural cloning) instead of the heuristic reward."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class Strict(BaseModel):
+    """Frozen, and unknown names are errors."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class Demonstrations(Strict):
+    """Where demonstrations come from: a directory of trajectory files, or the scripted expert."""
+
+    path: str | None = Field(None, description="directory of trajectory files (.npz); else the scripted expert")
+    expert: int = Field(20, ge=1, description="how many scripted-expert demonstrations to write into the run")
+    seed: int = Field(0, ge=0, description="seed of the first scripted-expert demonstration")
+
+
+class DiscriminatorSettings(Strict):
+    """The discriminator network and how it is trained."""
+
+    hidden: list[int] = [64, 64]
+    learning_rate: float = Field(3e-4, gt=0)
+    batch_size: int = Field(256, ge=2)
+    epochs: int = Field(2, ge=1, description="on-policy (PPO): passes over each rollout")
+    steps: int = Field(4, ge=1, description="off-policy (SAC): gradient steps after each rollout")
+    spectral_norm: bool = Field(False, description="spectrally normalise every layer")
+    current_rollout: bool = Field(True, description="off-policy: train only on the latest rollout's samples")
+    absorbing: bool = Field(True, description="terminated episodes continue in an absorbing state")
+    entropy: bool = Field(True, description="AIRL on PPO: the generator's reward keeps -log pi (max-entropy form)")
+
+
+class BehaviourCloning(Strict):
+    """Behavioural cloning of the demonstrated actions into the spec's PPO policy."""
+
+    epochs: int = Field(20, ge=1)
+    learning_rate: float = Field(1e-3, gt=0)
+    batch_size: int = Field(256, ge=2)
+
+
+class IRL(Strict):
+    """Which learner from demonstrations (none: forward RL on the spec's reward), and its settings."""
+
+    algorithm: Literal["none", "gail", "airl", "bc"] = "none"
+    demonstrations: Demonstrations = Demonstrations()
+    discriminator: DiscriminatorSettings = DiscriminatorSettings()
+    bc: BehaviourCloning = BehaviourCloning()
+
+    @property
+    def enabled(self) -> bool:
+        """Whether runs learn from demonstrations."""
+        return self.algorithm != "none"

@@ -1,0 +1,258 @@
+"""Pickle-free export of IRL networks: the loaded policy, value and reward reproduce SB3 and the discriminator."""
+
+import hashlib
+import json
+import shutil
+
+import numpy as np
+import pytest
+import torch
+
+from fastrl.agents.sb3 import build_model, make_vec_env
+from fastrl.env import FastEnv
+from fastrl.irl import Discriminator
+from fastrl.irl.discriminator import absorbing_states, augment
+from fastrl.irl.export import load_networks, save_networks
+from fastrl.spec import load_spec
+
+from .conftest import spec_file
+
+PPO_TINY = ["train.n_envs=2", "train.ppo.n_steps=16", "train.ppo.batch_size=32"]
+SAC_TINY = ["actions.mode=continuous", "train.algo=SAC", "train.n_envs=2", "train.sac.learning_starts=50",
+            "train.sac.batch_size=32"]
+GAMMA = 0.9
+FILES = {"policy.pt", "policy.json", "value.pt", "value.json", "reward.pt", "reward.json"}
+
+
+def raw_observations(spec, n: int, seed: int = 0) -> np.ndarray:
+    """n + 1 consecutive raw observations of one random-action episode (restarted if it ends)."""
+    env = FastEnv(spec)
+    env.action_space.seed(seed)
+    obs, _ = env.reset(seed=seed)
+    out = [obs]
+    while len(out) <= n:
+        obs, _, terminated, truncated, _ = env.step(env.action_space.sample())
+        out.append(obs)
+        if terminated or truncated:
+            obs, _ = env.reset()
+    return np.asarray(out, dtype=np.float32)
+
+
+def trained(spec_overrides):
+    """A tiny model trained for 200 steps (so VecNormalize's statistics moved) and 51 raw observations."""
+    spec = load_spec(spec_file("tracelines"), spec_overrides)
+    venv = make_vec_env(spec, 2, 0)
+    model = build_model(spec, venv)
+    model.learn(200)
+    obs = raw_observations(spec, 50)
+    assert not np.allclose(venv.normalize_obs(obs), obs, atol=1e-3)  # the normalisation is really exercised
+    return model, venv, obs
+
+
+@pytest.fixture(scope="module")
+def ppo_run():
+    return trained(PPO_TINY)
+
+
+@pytest.fixture(scope="module")
+def sac_run():
+    return trained(SAC_TINY)
+
+
+def spectral_disc(obs_dim: int, kind: str, absorbing: bool = True) -> Discriminator:
+    """A spectrally normalised discriminator after a few training steps (weights and power iterates moved)."""
+    torch.manual_seed(1)
+    disc = Discriminator(obs_dim, kind, GAMMA, hidden=(16, 16), spectral=True, absorbing=absorbing)
+    opt = torch.optim.Adam(disc.parameters(), lr=1e-2)
+    for _ in range(5):
+        s, s2 = augment(torch.randn(32, obs_dim)), augment(torch.randn(32, obs_dim))
+        loss = disc.logits(s, s2, torch.zeros(32), torch.zeros(32)).square().mean() - disc.absorbing_value()
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+    return disc
+
+
+def normalized_states(venv, obs) -> torch.Tensor:
+    """Discriminator inputs as the IRL loops build them: normalised observations with the absorbing flag."""
+    return augment(torch.as_tensor(venv.normalize_obs(obs)))
+
+
+def test_ppo_policy_and_value_match_sb3(ppo_run, tmp_path):
+    model, venv, obs = ppo_run
+    save_networks(tmp_path, model, venv, spectral_disc(obs.shape[1], "airl"), GAMMA)
+    paths = save_networks(tmp_path, model, venv, None, GAMMA)  # no discriminator: a stale reward is removed
+    assert {p.name for p in paths} == FILES - {"reward.pt", "reward.json"}
+    assert {p.name for p in tmp_path.iterdir()} == {p.name for p in paths}
+    nets = load_networks(tmp_path)
+    x = venv.normalize_obs(obs)
+    expected, _ = model.predict(x, deterministic=True)
+    actions = nets.policy(obs)
+    assert len(np.unique(expected)) > 1 and actions.shape == expected.shape
+    np.testing.assert_array_equal(actions, expected)
+    with torch.no_grad():
+        values = model.policy.predict_values(torch.as_tensor(x)).squeeze(-1).numpy()
+    np.testing.assert_allclose(nets.value(obs), values, atol=1e-5)
+    with pytest.raises(ValueError, match="no reward network"):
+        nets.reward(obs)
+
+
+def test_sac_policy_and_value_match_sb3(sac_run, tmp_path):
+    model, venv, obs = sac_run
+    save_networks(tmp_path, model, venv, None, GAMMA)
+    nets = load_networks(tmp_path)
+    x = venv.normalize_obs(obs)
+    expected, _ = model.predict(x, deterministic=True)
+    actions = nets.policy(obs)
+    assert actions.shape == expected.shape and np.ptp(expected, axis=0).min() > 1e-3
+    np.testing.assert_allclose(actions, expected, atol=1e-5)
+    with torch.no_grad():
+        xt = torch.as_tensor(x)
+        q1 = model.critic(xt, model.actor(xt, deterministic=True))[0].squeeze(-1).numpy()
+    np.testing.assert_allclose(nets.value(obs), q1, atol=1e-5)
+
+
+def test_airl_reward_and_potential_match_the_spectral_discriminator(ppo_run, tmp_path):
+    model, venv, obs = ppo_run
+    disc = spectral_disc(obs.shape[1], "airl")
+    before = {k: v.clone() for k, v in disc.state_dict().items()}
+    save_networks(tmp_path, model, venv, disc, GAMMA)
+    assert all(torch.equal(before[k], v) for k, v in disc.state_dict().items())  # no power-iteration step
+    assert disc.training
+    weights = torch.load(tmp_path / "reward.pt", weights_only=True)
+    raw = disc.r_psi[0].parametrizations.weight.original
+    assert not torch.allclose(weights["r_psi.0.weight"], raw, atol=1e-3)  # the effective weight W / sigma
+    disc.eval()
+    s = normalized_states(venv, obs)
+    nets = load_networks(tmp_path)
+    with torch.no_grad():
+        np.testing.assert_allclose(nets.reward(obs), disc.reward(s[:-1]).numpy(), atol=1e-5)
+        np.testing.assert_allclose(nets.potential(obs), disc.potential(s).numpy(), atol=1e-5)
+    assert nets.reward(obs).shape == (len(obs) - 1,)
+    assert nets.kind == "airl" and nets.gamma == GAMMA
+
+
+def test_gail_reward_is_the_logit_of_consecutive_states(ppo_run, tmp_path):
+    model, venv, obs = ppo_run
+    disc = spectral_disc(obs.shape[1], "gail")
+    save_networks(tmp_path, model, venv, disc, GAMMA)
+    disc.eval()
+    s = normalized_states(venv, obs)
+    zeros = torch.zeros(len(s) - 1)
+    nets = load_networks(tmp_path)
+    with torch.no_grad():
+        np.testing.assert_allclose(nets.reward(obs), disc.logits(s[:-1], s[1:], zeros, zeros).numpy(), atol=1e-5)
+    with pytest.raises(ValueError, match="only AIRL"):
+        nets.potential(obs)
+
+
+@pytest.mark.parametrize("kind", ["airl", "gail"])
+def test_learned_return_adds_the_absorbing_value_only_when_terminated(ppo_run, tmp_path, kind):
+    model, venv, obs = ppo_run
+    disc = spectral_disc(obs.shape[1], kind)
+    save_networks(tmp_path, model, venv, disc, GAMMA)
+    disc.eval()
+    a = absorbing_states(1, obs.shape[1])
+    with torch.no_grad():  # the unshaped learned reward of the absorbing state, as reward() gives it
+        r_abs = float(disc.reward(a)[0] if kind == "airl" else disc.logits(a, a, torch.zeros(1), torch.zeros(1))[0])
+    assert abs(r_abs) > 1e-4
+    nets = load_networks(tmp_path)
+    assert nets.absorbing_reward() == pytest.approx(r_abs, rel=1e-5, abs=1e-6)
+    r, big_t = nets.reward(obs).astype(np.float64), len(obs) - 1
+    truncated = nets.learned_return(obs, terminated=False)
+    assert truncated == pytest.approx(float(np.sum(GAMMA ** np.arange(big_t) * r)), rel=1e-9, abs=1e-9)
+    terminated = nets.learned_return(obs, terminated=True)
+    assert terminated - truncated == pytest.approx(GAMMA ** big_t * r_abs / (1 - GAMMA), rel=1e-5, abs=1e-6)
+    short = obs[:4]  # a short episode: the absorbing value weighs more
+    diff = nets.learned_return(short, True, gamma=0.5) - nets.learned_return(short, False, gamma=0.5)
+    assert diff == pytest.approx(0.5 ** 3 * r_abs / 0.5, rel=1e-5)
+
+
+def test_without_absorbing_states_termination_adds_nothing(ppo_run, tmp_path):
+    model, venv, obs = ppo_run
+    save_networks(tmp_path, model, venv, spectral_disc(obs.shape[1], "airl", absorbing=False), GAMMA)
+    nets = load_networks(tmp_path)
+    assert nets.learned_return(obs, True) == nets.learned_return(obs, False)
+
+
+class Payload:
+    """Code that a weights-only load must refuse to unpickle."""
+
+
+def _truncate(d):
+    data = (d / "policy.pt").read_bytes()
+    (d / "policy.pt").write_bytes(data[: len(data) // 2])
+
+
+def _rehash(d, name):
+    meta = json.loads((d / f"{name}.json").read_text())
+    meta["sha256"] = hashlib.sha256((d / f"{name}.pt").read_bytes()).hexdigest()
+    (d / f"{name}.json").write_text(json.dumps(meta))
+
+
+def _truncate_and_rehash(d):
+    _truncate(d)
+    _rehash(d, "policy")
+
+
+def _pickled_code(d):
+    torch.save({"value.0.weight": Payload()}, d / "value.pt")
+    _rehash(d, "value")
+
+
+def _edit_json(d, name, edit):
+    meta = json.loads((d / f"{name}.json").read_text())
+    edit(meta)
+    (d / f"{name}.json").write_text(json.dumps(meta))
+
+
+CORRUPTIONS = {
+    "truncated .pt": (_truncate, ValueError, "policy.pt"),
+    "truncated .pt, matching hash": (_truncate_and_rehash, ValueError, "policy.pt.*weights_only"),
+    "pickled code": (_pickled_code, ValueError, "value.pt.*weights_only"),
+    "missing obs_norm": (lambda d: _edit_json(d, "reward", lambda m: m.pop("obs_norm")), ValueError, "reward.json"),
+    "missing absorbing value": (lambda d: _edit_json(d, "reward", lambda m: m.pop("absorbing_value")), ValueError,
+                                "reward.json.*absorbing_value"),
+    "missing layer width": (lambda d: _edit_json(d, "policy", lambda m: m["parts"]["pi"][0].pop("in")), ValueError,
+                            "policy.json"),
+    "wrong layer width": (lambda d: _edit_json(d, "value", lambda m: m["parts"]["v"][0].update({"in": 3})),
+                          ValueError, "value.json"),
+    "unknown output": (lambda d: _edit_json(d, "policy", lambda m: m.update({"output": "sample"})), ValueError,
+                       "policy.json"),
+    "not JSON": (lambda d: (d / "value.json").write_text("{oops"), ValueError, "value.json"),
+    "missing json": (lambda d: (d / "value.json").unlink(), FileNotFoundError, "value.json"),
+    "missing .pt": (lambda d: (d / "reward.pt").unlink(), FileNotFoundError, "reward.pt"),
+}
+
+
+@pytest.fixture(scope="module")
+def exported(ppo_run, tmp_path_factory):
+    """A PPO + AIRL export to copy and corrupt."""
+    model, venv, obs = ppo_run
+    out = tmp_path_factory.mktemp("exported")
+    save_networks(out, model, venv, spectral_disc(obs.shape[1], "airl"), GAMMA)
+    return out
+
+
+@pytest.mark.parametrize("name", list(CORRUPTIONS))
+def test_corrupted_files_raise_errors_naming_the_file(exported, tmp_path, name):
+    corrupt, error, match = CORRUPTIONS[name]
+    d = tmp_path / "nets"
+    shutil.copytree(exported, d)
+    load_networks(d)  # the pristine copy loads
+    corrupt(d)
+    with pytest.raises(error, match=match):
+        load_networks(d)
+
+
+def test_every_file_is_plain_json_or_weights_only_tensors(exported):
+    assert {p.name for p in exported.iterdir()} == FILES  # no temporary files left behind
+    for name in ("policy", "value", "reward"):
+        tensors = torch.load(exported / f"{name}.pt", weights_only=True)
+        assert tensors and all(isinstance(k, str) and isinstance(v, torch.Tensor) for k, v in tensors.items())
+        meta = json.loads((exported / f"{name}.json").read_text())
+        assert meta["obs_norm"] is not None and {"obs_norm.mean", "obs_norm.var"} <= set(tensors)
+        linear = [(i, layer) for i, layer in enumerate(next(iter(meta["parts"].values()))) if layer["type"] == "linear"]
+        assert linear and all(f"{next(iter(meta['parts']))}.{i}.weight" in tensors for i, _ in linear)
+    reward = json.loads((exported / "reward.json").read_text())
+    assert {"kind", "gamma", "absorbing", "absorbing_value"} <= set(reward) and reward["kind"] == "airl"

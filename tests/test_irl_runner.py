@@ -1,0 +1,104 @@
+"""`fastrl irl` and `fastrl run` with an irl section, end to end on tiny budgets of the real thing."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from fastrl.cli import app
+from fastrl.data.replay import replay
+from fastrl.data.trajectory import Trajectory
+from fastrl.env import FastEnv
+from fastrl.irl.export import load_networks
+from fastrl.spec import load_spec
+
+from .conftest import spec_file
+from .test_runner import only_run, recorded, rrd_verify
+
+TINY = ["train.n_envs=2", "train.ppo.n_steps=64", "train.ppo.batch_size=64", "train.ppo.n_epochs=1",
+        "train.log_every=128", "train.checkpoint_every=256", "evaluate.episodes=2", "evaluate.record_episodes=1",
+        "evaluate.image_every=0", "episode.time_limit=8", "irl.demonstrations.expert=2",
+        "irl.discriminator.batch_size=64", "evaluate.periodic_every=256", "evaluate.periodic_episodes=1"]
+SAC = ["actions.mode=continuous", "train.algo=SAC", "train.sac.learning_starts=64", "train.sac.batch_size=32",
+       "train.sac.train_freq=16", "train.sac.gradient_steps=4", "train.sac.net_arch=[32, 32]"]
+
+
+def sets(extra=()):
+    """CLI --set arguments."""
+    return [a for kv in [*TINY, *extra] for a in ("--set", kv)]
+
+
+def invoke(args, runs: Path):
+    """The CLI, in-process."""
+    return CliRunner().invoke(app, [*args, "--runs", str(runs), "--no-progress"])
+
+
+@pytest.mark.parametrize(("algorithm", "extra", "suffix"), [
+    ("gail", [], "-gail-ppo-s0"), ("airl", [], "-airl-ppo-s0"), ("airl", SAC, "-airl-sac-s0"), ("bc", [], "-bc-s0")])
+def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
+    res = invoke(["irl", str(spec_file("tracelines")), "--algorithm", algorithm, "--timesteps", "512",
+                  *sets(extra)], tmp_path)
+    assert res.exit_code == 0, res.output
+    run = only_run(tmp_path)
+    assert run.name.endswith(suffix)
+    demos = sorted((run / "demos").glob("*.npz"))
+    assert len(demos) == 2
+    ev = json.loads((run / "eval.json").read_text())
+    assert ev["agent"]["episodes"] == 2
+    nets = load_networks(run / "networks")
+    traj = Trajectory.load(demos[0])
+    obs, infos, _ = replay(FastEnv(load_spec(run / "spec.yaml")), traj)
+    assert nets.value(obs).shape == (len(obs),) and np.isfinite(nets.value(obs)).all()
+    assert len(nets.policy(obs)) == len(obs)
+    if algorithm == "bc":
+        assert not (run / "networks" / "reward.pt").exists()
+        return
+    rewards = nets.reward(obs)
+    assert rewards.shape == (len(obs) - 1,) and np.isfinite(rewards).all()
+    assert np.isfinite(nets.learned_return(obs, terminated=bool(infos[-1]["success"])))
+    rows = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines()]
+    keys = set().union(*rows)
+    assert {"irl/disc_loss", "irl/disc_accuracy", "irl/reward_expert", "irl/reward_policy", "eval/subtasks"} <= keys
+    assert (run / "final" / "parts.pt").exists()
+    rrd_verify(run / "recording.rrd")
+    entities, _ = recorded(run / "recording.rrd")
+    assert any("irl/disc_accuracy" in e for e in entities) and any("eval/subtasks" in e for e in entities)
+
+
+def test_irl_reads_a_demo_folder_and_reports_bad_files(tmp_path):
+    demos = tmp_path / "demos"
+    res = CliRunner().invoke(app, ["demos", "--expert", str(spec_file("tracelines")), "-n", "2", "-o", str(demos),
+                                   "--no-progress"])
+    assert res.exit_code == 0, res.output
+    (demos / "broken.npz").write_bytes(b"not a trajectory")
+    res = invoke(["irl", str(spec_file("tracelines")), "--demos", str(demos), "--timesteps", "256", *sets()],
+                 tmp_path / "runs")
+    assert res.exit_code == 0, res.output
+    assert "broken.npz" in res.output
+    run = only_run(tmp_path / "runs")
+    assert not (run / "demos").exists()
+    assert json.loads((run / "meta.json").read_text())["status"] == "done"
+
+
+def test_irl_without_usable_demonstrations_is_a_clear_error(tmp_path):
+    empty = tmp_path / "none"
+    empty.mkdir()
+    res = invoke(["irl", str(spec_file("tracelines")), "--demos", str(empty), "--timesteps", "256", *sets()],
+                 tmp_path / "runs")
+    assert res.exit_code == 2
+    assert "no usable demonstrations" in res.output and "Traceback" not in res.output
+    res = invoke(["irl", str(spec_file("tracelines")), "--algorithm", "maxent", *sets()], tmp_path / "runs")
+    assert res.exit_code == 2 and "irl.algorithm" in res.output
+
+
+def test_run_with_an_irl_section_resumes_with_its_discriminator(tmp_path):
+    res = invoke(["run", str(spec_file("tracelines")), "--timesteps", "256", *sets(["irl.algorithm=airl"])], tmp_path)
+    assert res.exit_code == 0, res.output
+    run = only_run(tmp_path)
+    ckpt = sorted((run / "checkpoints").glob("*/parts.pt"))
+    assert ckpt
+    res = CliRunner().invoke(app, ["run", "--resume", str(run), "--timesteps", "512", "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert json.loads((run / "meta.json").read_text())["trained_timesteps"] >= 512
