@@ -99,8 +99,9 @@ def test_batches_get_one_absorbing_transition_per_terminated_episode():
     obs, nxt = np.random.randn(10, 6), np.random.randn(10, 6)
     term = np.zeros(10)
     term[[3, 9]] = 1
-    batch = make_batch(obs, nxt, term, np.full(10, -1.0), absorbing=True)
+    batch = make_batch(obs, nxt, term, np.full(10, -1.0), absorbing=True, gamma=0.9)
     assert len(batch) == 12 and batch.s.shape == (12, 7)
+    assert torch.allclose(batch.weight, torch.tensor([1.0] * 10 + [10.0] * 2))  # the tail 1 / (1 - gamma)
     assert torch.equal(batch.s[10:, -1], torch.ones(2)) and torch.equal(batch.s[:10, -1], torch.zeros(10))
     assert torch.equal(batch.log_pi[10:], torch.zeros(2))
     assert len(make_batch(obs, nxt, term, np.zeros(10), absorbing=False)) == 10

@@ -8,6 +8,7 @@ from stable_baselines3 import SAC
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.vec_env import VecNormalize
 
+from .discriminator import Discriminator
 from .fitting import Batch, Transitions, make_batch
 
 
@@ -30,9 +31,9 @@ def log_prob(model: BaseAlgorithm, obs: torch.Tensor, actions: torch.Tensor) -> 
         return lp
 
 
-def expert_batch(model: BaseAlgorithm, expert: Transitions, absorbing: bool) -> Batch:
+def expert_batch(model: BaseAlgorithm, expert: Transitions, disc: Discriminator) -> Batch:
     """The demonstrations as a discriminator batch, under the current normalisation and policy."""
     obs = torch.as_tensor(normalize_obs(model, expert.obs), dtype=torch.float32)
     nxt = normalize_obs(model, expert.next_obs)
     lp = log_prob(model, obs, torch.as_tensor(expert.actions, dtype=torch.float32))
-    return make_batch(obs, nxt, expert.terminal, lp, absorbing)
+    return make_batch(obs, nxt, expert.terminal, lp, disc.absorbing, disc.gamma)

@@ -78,8 +78,8 @@ class OffPolicyAdversarialCallback(BaseCallback):
         term = buf.dones[pos, env_idx] * (1 - buf.timeouts[pos, env_idx])
         obs_t = torch.as_tensor(obs, dtype=torch.float32)
         lp = log_prob(self.model, obs_t, torch.as_tensor(buf.actions[pos, env_idx], dtype=torch.float32))
-        policy = make_batch(obs_t, nxt, term, lp, self.disc.absorbing)
-        expert = expert_batch(self.model, self.expert, self.disc.absorbing)
+        policy = make_batch(obs_t, nxt, term, lp, self.disc.absorbing, self.disc.gamma)
+        expert = expert_batch(self.model, self.expert, self.disc)
         self.stats.update(self.fit.steps(policy, expert, self.n_steps))
         self.stats.update(self.fit.reward_stats(policy, expert))
         for key, value in self.stats.items():

@@ -1,0 +1,121 @@
+"""Off-policy AIRL (SAC generator) on TraceLines: both additions, and each one ablated, over seeds (Fig. 5).
+
+    python bench/irl_offpolicy.py run --seeds 0 1 2 --variants full no-current-rollout no-spectral-norm
+    python bench/irl_offpolicy.py report
+
+Variants: `full` (spectral normalisation + discriminator trained on the current rollout only),
+`no-current-rollout` (spectral norm, discriminator trained on samples of the whole replay buffer),
+`no-spectral-norm` (current rollout, plain discriminator). Every run is a real run directory under --root with
+a deterministic evaluation on 10 seeds every 25k steps, the same budget for all (no early stop). The report
+prints a table (mean and spread over seeds of the final evaluation, steps to 90% of the expert) and writes a
+figure of subtasks completed over steps.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import argparse
+import json
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+from irl_tasks import curve
+
+VARIANTS = {
+    "full": ["irl.discriminator.spectral_norm=true", "irl.discriminator.current_rollout=true"],
+    "no-current-rollout": ["irl.discriminator.spectral_norm=true", "irl.discriminator.current_rollout=false"],
+    "no-spectral-norm": ["irl.discriminator.spectral_norm=false", "irl.discriminator.current_rollout=true"],
+}
+# the fast SAC schedule measured by bench/sac_speed.py: 8 envs, 32 steps each between updates, 1 update per 8 steps
+SCHEDULE = ["actions.mode=continuous", "train.algo=SAC", "train.n_envs=8", "train.sac.train_freq=32",
+            "train.sac.gradient_steps=32", "train.sac.learning_starts=5000", "irl.algorithm=airl",
+            "irl.discriminator.steps=2", "evaluate.periodic_every=25000", "evaluate.periodic_episodes=10",
+            "train.checkpoint_every=50000", "train.keep_checkpoints=100", "evaluate.record_episodes=5"]
+
+
+def run(args) -> None:
+    """Train every (variant, seed) asked for, one after another."""
+    from fastrl.runner import start_run
+
+    for seed in args.seeds:
+        for variant in args.variants:
+            root = Path(args.root) / variant
+            sets = [*SCHEDULE, *VARIANTS[variant], f"train.seed={seed}", f"train.timesteps={args.steps}"]
+            t0 = time.perf_counter()
+            path = start_run("specs/tracelines.yaml", sets, root, progress=not args.quiet)
+            print(f"{variant} seed {seed}: {path} in {time.perf_counter() - t0:.0f} s", flush=True)
+
+
+def report(args) -> None:
+    """Table over seeds per variant, and the figure."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; root {args.root}")
+    print("| variant | seeds | final subtasks, mean ± sd | final success | steps to 90% (per seed) | "
+          "train steps/s |")
+    print("|---|---|---|---|---|---|")
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    rows = []
+    for variant in VARIANTS:
+        runs = sorted((Path(args.root) / variant).glob("*/*/eval.json"))
+        if not runs:
+            continue
+        finals, success, to90, fps, curves = [], [], [], [], []
+        for ev_path in runs:
+            run_dir = ev_path.parent
+            ev = json.loads(ev_path.read_text())
+            meta = json.loads((run_dir / "meta.json").read_text())
+            steps, subs, _ = curve(run_dir)
+            finals.append(ev["agent"]["subtasks_completed"])
+            success.append(ev["agent"]["success_rate"])
+            hit = next((s for s, v in zip(steps, subs) if v >= 0.9 * ev["expert"]["subtasks_completed"]), None)
+            to90.append(hit)
+            fps.append(meta["train_fps"])
+            curves.append((steps, subs))
+            rows.append({"variant": variant, "run": str(run_dir), "final_subtasks": finals[-1],
+                         "final_success": success[-1], "steps_to_90": hit, "train_fps": fps[-1],
+                         "curve": {"steps": steps, "subtasks": subs}})
+        n = min(len(c[0]) for c in curves)
+        steps = np.array(curves[0][0][:n])
+        subs = np.array([c[1][:n] for c in curves])
+        line, = ax.plot([0, *steps], [0, *subs.mean(0)], label=f"{variant} (n={len(runs)})")
+        ax.fill_between([0, *steps], [0, *subs.min(0)], [0, *subs.max(0)], color=line.get_color(), alpha=0.15)
+        hits = ", ".join(f"{h:,}" if h else "-" for h in to90)
+        print(f"| {variant} | {len(runs)} | {np.mean(finals):.1%} ± {np.std(finals):.1%} | {np.mean(success):.0%} | "
+              f"{hits} | {np.mean(fps):.0f} |")
+    ax.axhline(0.9, color="grey", ls=":", lw=1)
+    ax.set(title="Off-policy AIRL (SAC) on TraceLines: mean and range over seeds", xlabel="environment steps",
+           ylabel="subtasks completed (10 eval seeds)", ylim=(-0.02, 1.02))
+    ax.legend()
+    fig.tight_layout()
+    out = Path(args.figure)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    out.with_suffix(".json").write_text(json.dumps(rows, indent=2))
+    print(f"figure: {out}")
+
+
+def main() -> None:
+    """Parse arguments and run or report."""
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("mode", choices=["run", "report"])
+    ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    ap.add_argument("--steps", type=int, default=300_000)
+    ap.add_argument("--root", default="runs/bench-offpolicy")
+    ap.add_argument("--figure", default="docs/irl_fig5.png")
+    ap.add_argument("--quiet", action="store_true")
+    args = ap.parse_args()
+    run(args) if args.mode == "run" else report(args)
+
+
+if __name__ == "__main__":
+    main()
