@@ -129,3 +129,15 @@ def test_spectral_norm_bounds_every_layer():
     bounded, free = layer_norms_after_training(True), layer_norms_after_training(False)
     assert len(bounded) == 3 and max(bounded) <= 1.05
     assert max(free) > 1.5  # the same training without it grows the layers
+
+
+def test_standard_airl_is_one_network_on_transitions():
+    disc = Discriminator(6, "airl", 0.9, shaped=False)
+    s, s2 = augment(torch.randn(8, 6)), augment(torch.randn(8, 6))
+    with torch.no_grad():
+        f = disc.net(torch.cat([s, s2], dim=-1)).squeeze(-1)
+        assert torch.allclose(disc.f(s, s2, torch.zeros(8)), f)
+        assert torch.allclose(disc.logits(s, s2, torch.zeros(8), torch.full((8,), -2.0)), f + 2.0)
+    assert not hasattr(disc, "r_psi") and disc.config()["shaped"] is False
+    with pytest.raises(ValueError, match="shaped"):
+        disc.reward(s)

@@ -59,10 +59,10 @@ def sac_run():
     return trained(SAC_TINY)
 
 
-def spectral_disc(obs_dim: int, kind: str, absorbing: bool = True) -> Discriminator:
+def spectral_disc(obs_dim: int, kind: str, absorbing: bool = True, shaped: bool = True) -> Discriminator:
     """A spectrally normalised discriminator after a few training steps (weights and power iterates moved)."""
     torch.manual_seed(1)
-    disc = Discriminator(obs_dim, kind, GAMMA, hidden=(16, 16), spectral=True, absorbing=absorbing)
+    disc = Discriminator(obs_dim, kind, GAMMA, hidden=(16, 16), spectral=True, absorbing=absorbing, shaped=shaped)
     opt = torch.optim.Adam(disc.parameters(), lr=1e-2)
     for _ in range(5):
         s, s2 = augment(torch.randn(32, obs_dim)), augment(torch.randn(32, obs_dim))
@@ -132,9 +132,10 @@ def test_airl_reward_and_potential_match_the_spectral_discriminator(ppo_run, tmp
     assert nets.kind == "airl" and nets.gamma == GAMMA
 
 
-def test_gail_reward_is_the_logit_of_consecutive_states(ppo_run, tmp_path):
+@pytest.mark.parametrize("kind", ["gail", "airl"])
+def test_transition_rewards_are_the_logit_of_consecutive_states(ppo_run, tmp_path, kind):
     model, venv, obs = ppo_run
-    disc = spectral_disc(obs.shape[1], "gail")
+    disc = spectral_disc(obs.shape[1], kind, shaped=False)  # GAIL, and AIRL's standard (unshaped) form
     save_networks(tmp_path, model, venv, disc, GAMMA)
     disc.eval()
     s = normalized_states(venv, obs)
@@ -142,7 +143,7 @@ def test_gail_reward_is_the_logit_of_consecutive_states(ppo_run, tmp_path):
     nets = load_networks(tmp_path)
     with torch.no_grad():
         np.testing.assert_allclose(nets.reward(obs), disc.logits(s[:-1], s[1:], zeros, zeros).numpy(), atol=1e-5)
-    with pytest.raises(ValueError, match="only AIRL"):
+    with pytest.raises(ValueError, match="shaping potential"):
         nets.potential(obs)
 
 

@@ -40,19 +40,22 @@ class Discriminator(nn.Module):
     """Logits of 'expert' for transitions (s, s', terminal, log pi(a|s)) of augmented states; state-only rewards."""
 
     def __init__(self, obs_dim: int, kind: Literal["gail", "airl"], gamma: float, hidden=(64, 64),
-                 spectral: bool = False, absorbing: bool = True):
+                 spectral: bool = False, absorbing: bool = True, shaped: bool = True):
         super().__init__()
         self.obs_dim, self.kind, self.gamma = obs_dim, kind, gamma
         self.hidden, self.spectral, self.absorbing = tuple(hidden), spectral, absorbing
+        self.shaped = kind == "airl" and shaped  # AIRL's shaped form; else one network on (s, s')
         width = obs_dim + 1
-        if kind == "airl":
+        if self.shaped:
             self.r_psi = mlp(width, self.hidden, sn=spectral)   # the reward kept for scoring
             self.h = mlp(width, self.hidden, sn=spectral)       # the shaping potential
         else:
             self.net = mlp(2 * width, self.hidden, sn=spectral)
 
     def f(self, s, s2, terminal):
-        """AIRL's shaped term r_psi(s) + gamma h(s') - h(s); without absorbing states the terminal potential is 0."""
+        """AIRL's f: shaped r_psi(s) + gamma h(s') - h(s) (terminal potential 0 without absorbing), or net(s, s')."""
+        if not self.shaped:
+            return self.net(torch.cat([s, s2], dim=-1)).squeeze(-1)
         keep = 1.0 if self.absorbing else 1.0 - terminal
         return self.r_psi(s).squeeze(-1) + self.gamma * keep * self.h(s2).squeeze(-1) - self.h(s).squeeze(-1)
 
@@ -81,18 +84,18 @@ class Discriminator(nn.Module):
         return terminal * self.gamma * self.absorbing_value()
 
     def reward(self, s):
-        """The learned state reward r_psi(s) (AIRL only) of augmented states, separate from the shaping."""
-        if self.kind != "airl":
-            raise ValueError("only AIRL has a separable reward r_psi")
+        """The learned state reward r_psi(s) (shaped AIRL only) of augmented states, separate from the shaping."""
+        if not self.shaped:
+            raise ValueError("only shaped AIRL has a separable state reward r_psi")
         return self.r_psi(s).squeeze(-1)
 
     def potential(self, s):
         """AIRL's shaping potential h(s) of augmented states."""
-        if self.kind != "airl":
-            raise ValueError("only AIRL has a shaping potential h")
+        if not self.shaped:
+            raise ValueError("only shaped AIRL has a shaping potential h")
         return self.h(s).squeeze(-1)
 
     def config(self) -> dict:
         """What rebuilds this discriminator (for pickle-free saving)."""
         return {"obs_dim": self.obs_dim, "kind": self.kind, "gamma": self.gamma, "hidden": list(self.hidden),
-                "spectral": self.spectral, "absorbing": self.absorbing}
+                "spectral": self.spectral, "absorbing": self.absorbing, "shaped": self.shaped}

@@ -153,11 +153,13 @@ def value_export(model: BaseAlgorithm) -> tuple[dict, dict[str, torch.Tensor]]:
 
 def reward_export(disc: Discriminator, gamma: float) -> tuple[dict, dict[str, torch.Tensor]]:
     """The learned reward: AIRL's r_psi and potential h, or GAIL's net on (s, s'); with the absorbing value."""
-    parts = {"r_psi": disc.r_psi, "h": disc.h} if disc.kind == "airl" else {"net": disc.net}
+    shaped = disc.shaped
+    parts = {"r_psi": disc.r_psi, "h": disc.h} if shaped else {"net": disc.net}
     specs, tensors = export_parts(parts)
     with _eval_mode(disc):
         absorbing_value = float(disc.absorbing_value())
-    meta = {"parts": specs, "kind": disc.kind, "gamma": float(gamma), "absorbing": bool(disc.absorbing),
+    meta = {"parts": specs, "kind": disc.kind, "form": "state" if shaped else "transition",
+            "gamma": float(gamma), "absorbing": bool(disc.absorbing),
             "absorbing_value": absorbing_value, "discriminator": disc.config()}
     return meta, tensors
 
@@ -356,7 +358,8 @@ class Networks:
         if not any((self.directory / f"reward.{ext}").exists() for ext in ("json", "pt")):
             return None
         loaded = read_pair(self.directory, "reward")
-        loaded.variant("kind", {"airl": ("r_psi", "h"), "gail": ("net",)})
+        loaded.variant("kind", {"airl": (), "gail": ()})
+        loaded.variant("form", {"state": ("r_psi", "h"), "transition": ("net",)})
         for key in ("gamma", "absorbing", "absorbing_value"):
             if key not in loaded.meta:
                 raise ValueError(f"{loaded.path}: missing key {key!r}")
@@ -410,15 +413,15 @@ class Networks:
         r = self._reward_pair()
         with torch.no_grad():
             s = self._states(r, obs)
-            if r.meta["kind"] == "airl":
+            if r.meta["form"] == "state":
                 return r.parts["r_psi"](s[:-1]).squeeze(-1).numpy()
             return r.parts["net"](torch.cat([s[:-1], s[1:]], dim=-1)).squeeze(-1).numpy()
 
     def potential(self, obs: np.ndarray) -> np.ndarray:
         """AIRL's shaping potential h(s) of a batch of raw observations."""
         r = self._reward_pair()
-        if r.meta["kind"] != "airl":
-            raise ValueError(f"{self.directory / 'reward.json'}: only AIRL has a shaping potential h")
+        if r.meta["form"] != "state":
+            raise ValueError(f"{self.directory / 'reward.json'}: only shaped AIRL has a shaping potential h")
         with torch.no_grad():
             return r.parts["h"](self._states(r, obs)).squeeze(-1).numpy()
 
@@ -428,7 +431,7 @@ class Networks:
         a = torch.zeros(1, int(r.meta["discriminator"]["obs_dim"]) + 1)
         a[:, -1] = 1.0
         with torch.no_grad():
-            if r.meta["kind"] == "airl":
+            if r.meta["form"] == "state":
                 return float(r.parts["r_psi"](a)[0, 0])
             return float(r.parts["net"](torch.cat([a, a], dim=-1))[0, 0])
 

@@ -95,9 +95,9 @@ class DiscriminatorFit:
                 "irl/logit_policy": float(np.mean(z_p)), "irl/logit_expert": float(np.mean(z_e))}
 
     def reward_stats(self, policy: Batch, expert: Batch) -> dict[str, float]:
-        """Mean learned reward (r_psi for AIRL, the logit for GAIL) on policy and expert rows."""
+        """Mean learned reward (r_psi for shaped AIRL, else the logit) on policy and expert rows."""
         with torch.no_grad():
-            if self.disc.kind == "airl":
+            if self.disc.shaped:
                 rp, re = self.disc.reward(policy.s), self.disc.reward(expert.s)
             else:
                 rp = self.disc.logits(policy.s, policy.s2, policy.terminal, policy.log_pi)

@@ -31,8 +31,11 @@ def log_prob(model: BaseAlgorithm, obs: torch.Tensor, actions: torch.Tensor) -> 
         return lp
 
 
-def expert_batch(model: BaseAlgorithm, expert: Transitions, disc: Discriminator) -> Batch:
-    """The demonstrations as a discriminator batch, under the current normalisation and policy."""
+def expert_batch(model: BaseAlgorithm, expert: Transitions, disc: Discriminator, rows: np.ndarray | None = None
+                 ) -> Batch:
+    """The demonstrations (or only `rows` of them) as a discriminator batch, under the current policy."""
+    if rows is not None:
+        expert = Transitions(expert.obs[rows], expert.next_obs[rows], expert.terminal[rows], expert.actions[rows])
     obs = torch.as_tensor(normalize_obs(model, expert.obs), dtype=torch.float32)
     nxt = normalize_obs(model, expert.next_obs)
     lp = log_prob(model, obs, torch.as_tensor(expert.actions, dtype=torch.float32))

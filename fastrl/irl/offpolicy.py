@@ -79,7 +79,9 @@ class OffPolicyAdversarialCallback(BaseCallback):
         obs_t = torch.as_tensor(obs, dtype=torch.float32)
         lp = log_prob(self.model, obs_t, torch.as_tensor(buf.actions[pos, env_idx], dtype=torch.float32))
         policy = make_batch(obs_t, nxt, term, lp, self.disc.absorbing, self.disc.gamma)
-        expert = expert_batch(self.model, self.expert, self.disc)
+        # only as many expert rows as the fit draws: normalising and scoring all of them every rollout costs more
+        rows = self.fit.rng.integers(0, len(self.expert.obs), self.fit.batch_size * self.n_steps)
+        expert = expert_batch(self.model, self.expert, self.disc, rows)
         self.stats.update(self.fit.steps(policy, expert, self.n_steps))
         self.stats.update(self.fit.reward_stats(policy, expert))
         for key, value in self.stats.items():

@@ -32,6 +32,7 @@ class DiscriminatorSettings(Strict):
     spectral_norm: bool = Field(False, description="spectrally normalise every layer")
     current_rollout: bool = Field(True, description="off-policy: train only on the latest rollout's samples")
     absorbing: bool = Field(True, description="terminated episodes continue in an absorbing state")
+    shaped: bool = Field(True, description="AIRL: f = r_psi(s) + gamma h(s') - h(s); false: the standard f(s, s')")
     entropy: bool = Field(True, description="AIRL on PPO: the generator's reward keeps -log pi (max-entropy form)")
 
 

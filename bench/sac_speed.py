@@ -1,0 +1,101 @@
+"""How fast the off-policy generator (SAC, with the AIRL discriminator in the loop) trains, per update schedule.
+
+    python bench/sac_speed.py                      # all schedules, ~5 min on a quiet 2-core machine
+    python bench/sac_speed.py --schedules sb3-default fast --steps 4000
+
+Each schedule trains SAC on TraceLines (continuous actions) with off-policy AIRL from 20 scripted-expert
+demonstrations (current-rollout sampling, spectral norm), first past learning_starts (not timed), then for
+--steps environment steps (timed, best of --rounds). The reference is plain stable-baselines3 SAC with its
+default schedule (1 env, 1 gradient step per env step, batch 256, [256, 256]) and no discriminator, measured
+in the same process. Final performance of the schedules is compared by bench/irl_offpolicy.py runs.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import argparse
+import platform
+import time
+
+import torch
+
+SCHEDULES = {
+    # name: (n_envs, train_freq per env, gradient_steps, batch, net, with discriminator)
+    "sb3-plain": (1, 1, 1, 256, [256, 256], False),
+    "sb3-default": (1, 1, 1, 256, [256, 256], True),
+    "8 envs, 1 update / 8 steps": (8, 1, 1, 256, [256, 256], True),
+    "8 envs x 32 steps, 32 updates": (8, 32, 32, 256, [256, 256], True),
+    "fast": (8, 32, 32, 256, [128, 128], True),
+    "fast, 1 update / 16 steps": (8, 32, 16, 256, [128, 128], True),
+}
+
+
+def build(name: str, demos):
+    """A SAC model on TraceLines with the schedule, and its callback (or None)."""
+    from fastrl.agents.sb3 import build_model, make_vec_env
+    from fastrl.irl import Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
+    from fastrl.spec import load_spec
+
+    n_envs, freq, grad, batch, net, with_disc = SCHEDULES[name]
+    sets = ["actions.mode=continuous", "train.algo=SAC", f"train.n_envs={n_envs}", f"train.sac.train_freq={freq}",
+            f"train.sac.gradient_steps={grad}", f"train.sac.batch_size={batch}", f"train.sac.net_arch={net}",
+            "train.sac.learning_starts=1000"] + (["irl.algorithm=airl"] if with_disc else [])
+    spec = load_spec("specs/tracelines.yaml", sets)
+    venv = make_vec_env(spec, n_envs, 0)
+    model = build_model(spec, venv, replay_buffer_class=RelabelingReplayBuffer if with_disc else None)
+    cb = None
+    if with_disc:
+        disc = Discriminator(venv.observation_space.shape[0], "airl", 0.99, spectral=True)
+        cb = OffPolicyAdversarialCallback(disc, demos(spec), current_rollout=True, steps=2)
+    return model, cb
+
+
+def main() -> None:
+    """Time every schedule and print the table."""
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--schedules", nargs="+", default=list(SCHEDULES), choices=list(SCHEDULES))
+    ap.add_argument("--steps", type=int, default=3000, help="timed env steps per round (x4 for 8-env schedules)")
+    ap.add_argument("--rounds", type=int, default=2)
+    args = ap.parse_args()
+
+    from fastrl.agents.expert import ScriptedExpert
+    from fastrl.data.replay import expert_transitions, rollout_trajectory
+    from fastrl.env import FastEnv
+
+    cache = {}
+
+    def demos(spec):
+        if "t" not in cache:
+            env = FastEnv(spec)
+            expert = ScriptedExpert(env)
+            trajs = [rollout_trajectory(env, expert.act, s, {"source": "expert"}, expert.reset)[0] for s in range(20)]
+            cache["t"] = expert_transitions(FastEnv(spec), trajs)
+        return cache["t"]
+
+    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
+          f"torch {torch.__version__} ({torch.get_num_threads()} thread)")
+    print("| schedule | envs | steps/update | batch | net | steps/s | ms per update | vs plain SB3 SAC |")
+    print("|---|---|---|---|---|---|---|---|")
+    ref = None
+    for name in args.schedules:
+        model, cb = build(name, demos)
+        n_envs, freq, grad, batch, net, _ = SCHEDULES[name]
+        model.learn(1200, callback=cb)  # past learning_starts
+        steps = args.steps * (4 if n_envs > 1 else 1)
+        best = 0.0
+        for _ in range(args.rounds):
+            t0 = time.perf_counter()
+            model.learn(steps, callback=cb, reset_num_timesteps=False)
+            best = max(best, steps / (time.perf_counter() - t0))
+        updates_per_step = grad / (freq * n_envs)
+        ms = 1e3 / best / updates_per_step
+        ref = best if ref is None else ref
+        print(f"| {name} | {n_envs} | {1 / updates_per_step:g} | {batch} | {net} | {best:,.0f} | {ms:.1f} | "
+              f"{best / ref:.1f}x |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
