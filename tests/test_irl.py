@@ -10,7 +10,7 @@ from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.data.replay import expert_transitions, rollout_trajectory
 from fastrl.irl import AdversarialCallback, Discriminator
 from fastrl.irl.discriminator import absorbing_states, augment
-from fastrl.irl.fitting import make_batch
+from fastrl.irl.fitting import DiscriminatorFit, make_batch
 from fastrl.spec import load_spec
 
 from .conftest import spec_file
@@ -99,9 +99,8 @@ def test_batches_get_one_absorbing_transition_per_terminated_episode():
     obs, nxt = np.random.randn(10, 6), np.random.randn(10, 6)
     term = np.zeros(10)
     term[[3, 9]] = 1
-    batch = make_batch(obs, nxt, term, np.full(10, -1.0), absorbing=True, gamma=0.9)
+    batch = make_batch(obs, nxt, term, np.full(10, -1.0), absorbing=True)
     assert len(batch) == 12 and batch.s.shape == (12, 7)
-    assert torch.allclose(batch.weight, torch.tensor([1.0] * 10 + [10.0] * 2))  # the tail 1 / (1 - gamma)
     assert torch.equal(batch.s[10:, -1], torch.ones(2)) and torch.equal(batch.s[:10, -1], torch.zeros(10))
     assert torch.equal(batch.log_pi[10:], torch.zeros(2))
     assert len(make_batch(obs, nxt, term, np.zeros(10), absorbing=False)) == 10
@@ -141,3 +140,22 @@ def test_standard_airl_is_one_network_on_transitions():
     assert not hasattr(disc, "r_psi") and disc.config()["shaped"] is False
     with pytest.raises(ValueError, match="shaped"):
         disc.reward(s)
+
+
+@pytest.mark.parametrize("kind", ["gail", "airl"])
+def test_absorbing_rows_train_only_the_absorbing_constants(kind):
+    torch.manual_seed(0)
+    disc = Discriminator(6, kind, 0.99, hidden=(16, 16), spectral=True)
+    ends = make_batch(np.random.randn(4, 6), np.random.randn(4, 6), np.ones(4), np.zeros(4), absorbing=True)
+    absorbed = ends.take(slice(4, 8))  # the four absorbing rows appended for four terminated episodes
+    assert torch.equal(absorbed.s[:, -1], torch.ones(4)) and torch.equal(absorbed.s[:, :-1], torch.zeros(4, 6))
+    z = disc.logits(absorbed.s, absorbed.s2, absorbed.terminal, absorbed.log_pi)
+    torch.nn.functional.binary_cross_entropy_with_logits(z, torch.ones(4)).backward()
+    for name, p in disc.named_parameters():
+        moved = p.grad is not None and bool(p.grad.abs().sum() > 0)
+        assert moved == ("r_absorbing" in name or (kind == "airl" and "h_absorbing" in name and disc.gamma != 1)), name
+    fit = DiscriminatorFit(disc, lr=1e-2, batch_size=4)
+    policy = make_batch(np.random.randn(4, 6), np.random.randn(4, 6), np.zeros(4), np.zeros(4), absorbing=True)
+    for _ in range(50):  # the expert always ends, the policy never: ending becomes worth more
+        fit._fit(policy, absorbed, [np.arange(4)])
+    assert disc.absorbing_value() > 5.0  # a free constant, whatever the spectral norm does to the networks

@@ -65,8 +65,9 @@ def spectral_disc(obs_dim: int, kind: str, absorbing: bool = True, shaped: bool 
     disc = Discriminator(obs_dim, kind, GAMMA, hidden=(16, 16), spectral=True, absorbing=absorbing, shaped=shaped)
     opt = torch.optim.Adam(disc.parameters(), lr=1e-2)
     for _ in range(5):
-        s, s2 = augment(torch.randn(32, obs_dim)), augment(torch.randn(32, obs_dim))
-        loss = disc.logits(s, s2, torch.zeros(32), torch.zeros(32)).square().mean() - disc.absorbing_value()
+        a = absorbing_states(4, obs_dim)  # absorbing rows train the absorbing constants away from 0
+        s, s2 = torch.cat([augment(torch.randn(32, obs_dim)), a]), torch.cat([augment(torch.randn(32, obs_dim)), a])
+        loss = (disc.logits(s, s2, torch.zeros(36), torch.zeros(36)) - 1.0).square().mean()
         opt.zero_grad()
         loss.backward()
         opt.step()

@@ -42,7 +42,7 @@ class AdversarialCallback(BaseCallback):
         n, e = buf.buffer_size, buf.n_envs
         obs, nxt = buf.observations.reshape(n * e, -1), np.stack(self.next_obs).reshape(n * e, -1)
         term, log_pi = np.stack(self.terminal).reshape(n * e), buf.log_probs.reshape(n * e)
-        policy = make_batch(obs, nxt, term, log_pi, self.disc.absorbing, self.disc.gamma)
+        policy = make_batch(obs, nxt, term, log_pi, self.disc.absorbing)
         expert = expert_batch(self.model, self.expert, self.disc)
         self.stats.update(self.fit.epochs(policy, expert, self.n_epochs))
         self.stats.update(self.fit.reward_stats(policy, expert))

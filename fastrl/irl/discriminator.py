@@ -3,6 +3,8 @@
 Inputs carry one extra column, the absorbing flag: an episode that terminates (the task is done) continues
 in an absorbing state forever, so demonstrations and rollouts of different lengths are compared fairly
 (Kostrikov et al., "Discriminator-Actor-Critic"). Truncated episodes are bootstrapped by the generator.
+Each network's value at the absorbing state is a learned constant of its own, not the network evaluated at
+a made-up input: a spectrally normalised network could not tell that input from ordinary states.
 """
 
 from __future__ import annotations
@@ -49,21 +51,37 @@ class Discriminator(nn.Module):
         if self.shaped:
             self.r_psi = mlp(width, self.hidden, sn=spectral)   # the reward kept for scoring
             self.h = mlp(width, self.hidden, sn=spectral)       # the shaping potential
+            self.h_absorbing = nn.Parameter(torch.zeros(()))
         else:
             self.net = mlp(2 * width, self.hidden, sn=spectral)
+        self.r_absorbing = nn.Parameter(torch.zeros(()))  # r_psi (or net) at the absorbing state
+
+    @staticmethod
+    def _masked(net_out: torch.Tensor, flag: torch.Tensor, constant: torch.Tensor) -> torch.Tensor:
+        """The network's output on real states, the constant on absorbing ones."""
+        return (1.0 - flag) * net_out.squeeze(-1) + flag * constant
+
+    def _r(self, s):
+        return self._masked(self.r_psi(s), s[..., -1], self.r_absorbing)
+
+    def _h(self, s):
+        return self._masked(self.h(s), s[..., -1], self.h_absorbing)
+
+    def _net(self, s, s2):
+        return self._masked(self.net(torch.cat([s, s2], dim=-1)), s[..., -1], self.r_absorbing)
 
     def f(self, s, s2, terminal):
         """AIRL's f: shaped r_psi(s) + gamma h(s') - h(s) (terminal potential 0 without absorbing), or net(s, s')."""
         if not self.shaped:
-            return self.net(torch.cat([s, s2], dim=-1)).squeeze(-1)
+            return self._net(s, s2)
         keep = 1.0 if self.absorbing else 1.0 - terminal
-        return self.r_psi(s).squeeze(-1) + self.gamma * keep * self.h(s2).squeeze(-1) - self.h(s).squeeze(-1)
+        return self._r(s) + self.gamma * keep * self._h(s2) - self._h(s)
 
     def logits(self, s, s2, terminal, log_pi):
         """log D - log(1 - D): AIRL's f - log pi, or GAIL's network output."""
         if self.kind == "airl":
             return self.f(s, s2, terminal) - log_pi
-        return self.net(torch.cat([s, s2], dim=-1)).squeeze(-1)
+        return self._net(s, s2)
 
     def generator_reward(self, s, s2, terminal, log_pi, entropy: bool = True):
         """What the generator maximises: AIRL log D - log(1 - D) (no -log pi unless `entropy`); GAIL -log(1 - D)."""
@@ -87,13 +105,13 @@ class Discriminator(nn.Module):
         """The learned state reward r_psi(s) (shaped AIRL only) of augmented states, separate from the shaping."""
         if not self.shaped:
             raise ValueError("only shaped AIRL has a separable state reward r_psi")
-        return self.r_psi(s).squeeze(-1)
+        return self._r(s)
 
     def potential(self, s):
         """AIRL's shaping potential h(s) of augmented states."""
         if not self.shaped:
             raise ValueError("only shaped AIRL has a shaping potential h")
-        return self.h(s).squeeze(-1)
+        return self._h(s)
 
     def config(self) -> dict:
         """What rebuilds this discriminator (for pickle-free saving)."""

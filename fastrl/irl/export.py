@@ -160,7 +160,8 @@ def reward_export(disc: Discriminator, gamma: float) -> tuple[dict, dict[str, to
         absorbing_value = float(disc.absorbing_value())
     meta = {"parts": specs, "kind": disc.kind, "form": "state" if shaped else "transition",
             "gamma": float(gamma), "absorbing": bool(disc.absorbing),
-            "absorbing_value": absorbing_value, "discriminator": disc.config()}
+            "absorbing_value": absorbing_value, "absorbing_reward": float(disc.r_absorbing.detach()),
+            "discriminator": disc.config()}
     return meta, tensors
 
 
@@ -360,7 +361,7 @@ class Networks:
         loaded = read_pair(self.directory, "reward")
         loaded.variant("kind", {"airl": (), "gail": ()})
         loaded.variant("form", {"state": ("r_psi", "h"), "transition": ("net",)})
-        for key in ("gamma", "absorbing", "absorbing_value"):
+        for key in ("gamma", "absorbing", "absorbing_value", "absorbing_reward"):
             if key not in loaded.meta:
                 raise ValueError(f"{loaded.path}: missing key {key!r}")
         return loaded
@@ -426,14 +427,8 @@ class Networks:
             return r.parts["h"](self._states(r, obs)).squeeze(-1).numpy()
 
     def absorbing_reward(self) -> float:
-        """The learned reward of the absorbing state (zero observation, flag 1), in the same form as reward()."""
-        r = self._reward_pair()
-        a = torch.zeros(1, int(r.meta["discriminator"]["obs_dim"]) + 1)
-        a[:, -1] = 1.0
-        with torch.no_grad():
-            if r.meta["form"] == "state":
-                return float(r.parts["r_psi"](a)[0, 0])
-            return float(r.parts["net"](torch.cat([a, a], dim=-1))[0, 0])
+        """The learned reward of the absorbing state (a learned constant), in the same form as reward()."""
+        return float(self._reward_pair().meta["absorbing_reward"])
 
     def learned_return(self, obs: np.ndarray, terminated: bool, gamma: float | None = None) -> float:
         """sum_t gamma^t r_t, plus, if the episode terminated, gamma^T r(absorbing) / (1 - gamma) for what follows."""

@@ -22,39 +22,32 @@ class Transitions:
 
 @dataclass
 class Batch:
-    """Discriminator inputs: augmented states s, s', terminal flags, log pi(a|s), and loss weights."""
+    """Discriminator inputs: augmented states s, s', terminal flags and log pi(a|s)."""
 
     s: torch.Tensor
     s2: torch.Tensor
     terminal: torch.Tensor
     log_pi: torch.Tensor
-    weight: torch.Tensor
 
     def __len__(self) -> int:
         return len(self.s)
 
     def take(self, idx) -> Batch:
         """The rows idx."""
-        return Batch(self.s[idx], self.s2[idx], self.terminal[idx], self.log_pi[idx], self.weight[idx])
+        return Batch(self.s[idx], self.s2[idx], self.terminal[idx], self.log_pi[idx])
 
 
-def make_batch(obs, next_obs, terminal, log_pi, absorbing: bool, gamma: float = 0.99) -> Batch:
-    """Tensors of (normalised) observations, plus one absorbing transition per terminated one.
-
-    An absorbing row stands for the whole discounted tail after the end, so it weighs 1 / (1 - gamma) in the loss:
-    otherwise a few episode ends among thousands of steps barely teach the discriminator what ending is worth.
-    """
+def make_batch(obs, next_obs, terminal, log_pi, absorbing: bool) -> Batch:
+    """Tensors of (normalised) observations, plus one absorbing transition per terminated one."""
     s, s2 = augment(torch.as_tensor(obs, dtype=torch.float32)), augment(torch.as_tensor(next_obs, dtype=torch.float32))
     term = torch.as_tensor(terminal, dtype=torch.float32).reshape(-1)
     log_pi = torch.as_tensor(log_pi, dtype=torch.float32).reshape(-1)
-    weight = torch.ones(len(s))
     k = int(term.sum()) if absorbing else 0
     if k:
         a = absorbing_states(k, s.shape[1] - 1)
         s, s2 = torch.cat([s, a]), torch.cat([s2, a])
         term, log_pi = torch.cat([term, torch.zeros(k)]), torch.cat([log_pi, torch.zeros(k)])
-        weight = torch.cat([weight, torch.full((k,), 1.0 / max(1.0 - gamma, 1e-3))])
-    return Batch(s, s2, term, log_pi, weight)
+    return Batch(s, s2, term, log_pi)
 
 
 class DiscriminatorFit:
@@ -83,7 +76,7 @@ class DiscriminatorFit:
             p, e = policy.take(idx), expert.take(self.rng.integers(0, len(expert), len(idx)))
             zp = self.disc.logits(p.s, p.s2, p.terminal, p.log_pi)
             ze = self.disc.logits(e.s, e.s2, e.terminal, e.log_pi)
-            loss = bce(zp, torch.zeros_like(zp), weight=p.weight) + bce(ze, torch.ones_like(ze), weight=e.weight)
+            loss = bce(zp, torch.zeros_like(zp)) + bce(ze, torch.ones_like(ze))
             self.optim.zero_grad()
             loss.backward()
             self.optim.step()

@@ -39,4 +39,4 @@ def expert_batch(model: BaseAlgorithm, expert: Transitions, disc: Discriminator,
     obs = torch.as_tensor(normalize_obs(model, expert.obs), dtype=torch.float32)
     nxt = normalize_obs(model, expert.next_obs)
     lp = log_prob(model, obs, torch.as_tensor(expert.actions, dtype=torch.float32))
-    return make_batch(obs, nxt, expert.terminal, lp, disc.absorbing, disc.gamma)
+    return make_batch(obs, nxt, expert.terminal, lp, disc.absorbing)

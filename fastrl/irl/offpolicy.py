@@ -78,7 +78,7 @@ class OffPolicyAdversarialCallback(BaseCallback):
         term = buf.dones[pos, env_idx] * (1 - buf.timeouts[pos, env_idx])
         obs_t = torch.as_tensor(obs, dtype=torch.float32)
         lp = log_prob(self.model, obs_t, torch.as_tensor(buf.actions[pos, env_idx], dtype=torch.float32))
-        policy = make_batch(obs_t, nxt, term, lp, self.disc.absorbing, self.disc.gamma)
+        policy = make_batch(obs_t, nxt, term, lp, self.disc.absorbing)
         # only as many expert rows as the fit draws: normalising and scoring all of them every rollout costs more
         rows = self.fit.rng.integers(0, len(self.expert.obs), self.fit.batch_size * self.n_steps)
         expert = expert_batch(self.model, self.expert, self.disc, rows)
