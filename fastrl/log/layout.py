@@ -12,8 +12,25 @@ def episode_name(index: int) -> str:
     return f"ep_{index:02d}"
 
 
+def training_views(irl: bool = False) -> rrb.Tabs:
+    """Training curves in tabs: episodes, evaluations during training, (discriminator, learned reward), all."""
+    def series(origin: str, name: str, contents=None) -> rrb.TimeSeriesView:
+        return rrb.TimeSeriesView(origin=origin, contents=contents or ["$origin/**"], name=name,
+                                  plot_legend=rrb.Corner2D.LeftTop)
+
+    tabs = [series("/metrics/train/episode", "training episodes"),
+            series("/metrics/train/eval", "evaluation during training")]
+    if irl:
+        tabs += [series("/metrics/train/irl", "discriminator",
+                        ["+ $origin/disc_accuracy", "+ $origin/disc_loss"]),
+                 series("/metrics/train/irl", "learned reward",
+                        ["+ $origin/reward_expert", "+ $origin/reward_policy"])]
+    tabs.append(series("/metrics/train", "all curves (timeline: timesteps)"))
+    return rrb.Tabs(*tabs, active_tab=2 if irl else 0)
+
+
 def run_blueprint(
-    n_episodes: int, focus: int = 0, eye: tuple | None = None, timeline: str | None = None
+    n_episodes: int, focus: int = 0, eye: tuple | None = None, timeline: str | None = None, irl: bool = False
 ) -> rrb.Blueprint:
     """3D scene + episode `focus`, its endoscope image and reward features, training, summary."""
     # Other episodes stay in the recording, hidden from the 3D view. Time series views plot
@@ -24,11 +41,7 @@ def run_blueprint(
         eye_controls = rrb.EyeControls3D(
             position=eye[0], look_target=eye[1], eye_up=(0.0, 0.0, 1.0)
         )
-    training = rrb.TimeSeriesView(
-        origin="/metrics/train",
-        name="training (timeline: timesteps)",
-        plot_legend=rrb.Corner2D.LeftTop,
-    )
+    training = training_views(irl)
     summary = rrb.TextDocumentView(origin="/summary", name="summary")
     if n_episodes <= 0:
         scene = rrb.Spatial3DView(

@@ -89,10 +89,10 @@ class RunRecorder:
             static=True,
         )
 
-    def send_blueprint(self, n_episodes: int) -> None:
+    def send_blueprint(self, n_episodes: int, irl: bool = False) -> None:
         """Send the layout the viewer opens with (scene + episode 0, image, curves, summary)."""
         self.rec.send_blueprint(
-            run_blueprint(n_episodes, eye=self.eye), make_active=True, make_default=True
+            run_blueprint(n_episodes, eye=self.eye, irl=irl), make_active=True, make_default=True
         )
 
     def close(self) -> None:
