@@ -34,9 +34,9 @@ VARIANTS = {
 # the fast SAC schedule measured by bench/sac_speed.py: 8 envs, 32 steps each between updates, 1 update per 8 steps
 SCHEDULE = ["actions.mode=continuous", "train.algo=SAC", "train.n_envs=8", "train.sac.train_freq=32",
             "train.sac.gradient_steps=32", "train.sac.net_arch=[128, 128]", "train.sac.learning_starts=5000",
-            "irl.algorithm=airl",
-            "irl.discriminator.steps=2", "evaluate.periodic_every=25000", "evaluate.periodic_episodes=10",
-            "train.checkpoint_every=50000", "train.keep_checkpoints=100", "evaluate.record_episodes=5"]
+            "irl.algorithm=airl", "irl.discriminator.steps=16", "irl.discriminator.learning_rate=1e-3",
+            "evaluate.periodic_every=25000", "evaluate.periodic_episodes=10", "train.checkpoint_every=50000",
+            "train.keep_checkpoints=100", "evaluate.record_episodes=5"]
 
 
 def run(args) -> None:

@@ -18,6 +18,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -49,7 +50,9 @@ def check(run: Path, episodes: int) -> dict:
     env = FastEnv(spec)
     venv = make_vec_env(spec, 1, spec.train.seed)
     venv.training = False
-    policies = {0: policy_function(build_model(spec, venv), venv)}
+    with warnings.catch_warnings():  # one env cannot fill a training batch: we only act
+        warnings.simplefilter("ignore", UserWarning)
+        policies = {0: policy_function(build_model(spec, venv), venv)}
     for ckpt in sorted((run / "checkpoints").glob("[0-9]*")):
         policies[int(ckpt.name)] = checkpoint_policy(spec, ckpt)
     rows = []

@@ -49,7 +49,7 @@ def build(name: str, demos):
     cb = None
     if with_disc:
         disc = Discriminator(venv.observation_space.shape[0], "airl", 0.99, spectral=True)
-        cb = OffPolicyAdversarialCallback(disc, demos(spec), current_rollout=True, steps=2)
+        cb = OffPolicyAdversarialCallback(disc, demos(spec), current_rollout=True, steps=16, lr=1e-3)
     return model, cb
 
 

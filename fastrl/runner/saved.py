@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 from ..agents.sb3 import build_model, load_checkpoint, make_vec_env, policy_function
@@ -25,7 +26,9 @@ def load_policy(run: Path) -> tuple[TaskSpec, object]:
 def checkpoint_policy(spec: TaskSpec, checkpoint: Path):
     """The deterministic policy (obs -> action) saved in one checkpoint directory."""
     venv = make_vec_env(spec, 1, spec.train.seed)
-    model = build_model(spec, venv)
+    with warnings.catch_warnings():  # SB3 warns that one env cannot fill a training batch: we only act
+        warnings.simplefilter("ignore", UserWarning)
+        model = build_model(spec, venv)
     load_checkpoint(checkpoint, model, venv)
     venv.training = False
     return policy_function(model, venv)
