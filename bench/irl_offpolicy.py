@@ -110,7 +110,7 @@ def main() -> None:
     ap.add_argument("mode", choices=["run", "report"])
     ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
-    ap.add_argument("--steps", type=int, default=300_000)
+    ap.add_argument("--steps", type=int, default=100_000)
     ap.add_argument("--root", default="runs/bench-offpolicy")
     ap.add_argument("--figure", default="docs/irl_fig5.png")
     ap.add_argument("--quiet", action="store_true")

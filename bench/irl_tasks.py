@@ -1,4 +1,4 @@
-"""GAIL and AIRL (PPO generator) from 20 scripted-expert demonstrations, next to PPO on the heuristic reward.
+"""GAIL, AIRL (PPO generator) and BC from 20 scripted-expert demonstrations, next to PPO on the heuristic reward.
 
     python bench/irl_tasks.py run --tasks tracelines --algos gail airl ppo     # train (real `fastrl run`s)
     python bench/irl_tasks.py report                                          # table + figure from the runs
@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 TASKS = ["imagecentring", "periscoping", "tracelines"]
-ALGOS = ["ppo", "gail", "airl"]
+ALGOS = ["ppo", "gail", "airl", "bc"]
 
 
 def overrides(algo: str, seed: int, cap: int) -> list[str]:
@@ -94,11 +94,16 @@ def report(args) -> None:
                    "final_success": ev["agent"]["success_rate"], "final_subtasks": ev["agent"]["subtasks_completed"]}
             rows.append(row)
             to90 = f"{row['steps_to_90']:,}" if hit is not None else "not reached"
+            if algo == "bc":  # trained offline on the demonstrations: no environment steps
+                to90 = "0 (offline)" if row["final_subtasks"] >= 0.9 * expert else "not reached"
             wall = f"{row['seconds_to_90'] / 60:.1f} min" if hit is not None else "-"
             print(f"| {task} | {algo.upper()} | {to90} | {wall} | {row['steps']:,} | "
                   f"{row['train_seconds'] / 60:.1f} min | {row['final_success']:.0%} | "
                   f"{row['final_subtasks']:.1%} ({expert:.0%}) |")
-            ax.plot([0, *steps], [0, *subs], marker=".", label=algo.upper())
+            if algo == "bc":  # no training loop: its final evaluation, as a level
+                ax.axhline(row["final_subtasks"], color="black", ls="--", lw=1, label="BC (20 demos)")
+            else:
+                ax.plot([0, *steps], [0, *subs], marker=".", label=algo.upper())
         ax.axhline(0.9, color="grey", ls=":", lw=1)
         ax.set(title=task, xlabel="environment steps", ylabel="subtasks completed (10 eval seeds)", ylim=(-0.02, 1.02))
         ax.legend()
