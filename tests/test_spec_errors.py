@@ -358,8 +358,24 @@ def test_json_schema():
         "observation",
         "reward",
         "train",
+        "irl",
         "evaluate",
     }
     assert set(schema["required"]) == {"name", "scene", "scope", "task", "reward"}
     assert schema["additionalProperties"] is False
     assert json.loads(json.dumps(schema)) == schema
+
+
+def test_irl_section_errors_name_the_field(tmp_path):
+    """Unknown algorithms and BC on a SAC generator are spec errors with their field."""
+    from fastrl.spec import SpecError, load_spec
+
+    with pytest.raises(SpecError) as e:
+        load_spec(SPECS / "tracelines.yaml", ["irl.algorithm=maxent"])
+    assert "irl.algorithm" in str(e.value)
+    with pytest.raises(SpecError) as e:
+        load_spec(SPECS / "tracelines.yaml", ["irl.algorithm=bc", "train.algo=SAC", "actions.mode=continuous"])
+    assert "irl.algorithm" in str(e.value) and "PPO" in str(e.value)
+    with pytest.raises(SpecError) as e:
+        load_spec(SPECS / "tracelines.yaml", ["irl.discriminator.spectral=true"])
+    assert "spectral_norm" in str(e.value)  # did you mean
