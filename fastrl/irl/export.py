@@ -7,14 +7,11 @@ Loading needs only json and torch: the MLPs are evaluated with plain torch ops, 
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 import torch
 from gymnasium import spaces
 from stable_baselines3 import SAC
@@ -26,8 +23,8 @@ from stable_baselines3.common.vec_env import VecEnv, unwrap_vec_normalize
 from torch import nn
 
 from .discriminator import Discriminator
+from .networks import FORMAT, Networks, file_sha256, load_networks  # noqa: F401  (loading beside saving)
 
-FORMAT = "fastrl.networks/1"
 ACTIVATIONS = {nn.Tanh: "tanh", nn.ReLU: "relu"}
 
 # ----------------------------------------------------------------------------------------------- export
@@ -176,7 +173,7 @@ def write_pair(out_dir: Path, name: str, meta: dict, tensors: dict[str, torch.Te
     """NAME.pt (tensors) then NAME.json (meta, with the .pt's file name and sha256)."""
     pt, js = out_dir / f"{name}.pt", out_dir / f"{name}.json"
     _atomic_write(pt, lambda p: torch.save(tensors, p))
-    meta = {"format": FORMAT, "network": name, **meta, "weights": pt.name, "sha256": _sha256(pt)}
+    meta = {"format": FORMAT, "network": name, **meta, "weights": pt.name, "sha256": file_sha256(pt)}
     _atomic_write(js, lambda p: p.write_text(json.dumps(meta, indent=2)))
     return [pt, js]
 
@@ -201,246 +198,3 @@ def save_networks(out_dir: Path, model: BaseAlgorithm, venv: VecEnv | None, disc
 
 # ----------------------------------------------------------------------------------------------- load
 
-
-def _sha256(path: Path) -> str:
-    """Hex sha256 of a file's bytes."""
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _read_json(path: Path) -> dict:
-    """A JSON object, or a clear error naming the file."""
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: file not found")
-    try:
-        meta = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as e:
-        raise ValueError(f"{path}: not valid JSON ({e})") from e
-    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-        raise ValueError(f"{path}: not a {FORMAT} file")
-    return meta
-
-
-def _read_tensors(path: Path, sha256: str) -> dict[str, torch.Tensor]:
-    """A flat dict of tensors, loaded with weights_only=True after checking its sha256."""
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: file not found")
-    if _sha256(path) != sha256:
-        raise ValueError(f"{path}: contents do not match the sha256 recorded in its JSON (corrupted or replaced)")
-    try:
-        tensors = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as e:  # truncated zip, or anything weights_only refuses to unpickle
-        raise ValueError(f"{path}: cannot load with weights_only=True ({e})") from e
-    if not isinstance(tensors, dict) or not all(isinstance(k, str) and isinstance(v, torch.Tensor)
-                                                for k, v in tensors.items()):
-        raise ValueError(f"{path}: not a flat dict of tensors")
-    return tensors
-
-
-@dataclass(frozen=True)
-class Mlp:
-    """A chain of linear layers and activations evaluated with plain torch ops."""
-
-    layers: tuple
-
-    def __call__(self, x: torch.Tensor) -> torch.Tensor:
-        for kind, a, b in self.layers:
-            if kind == "linear":
-                x = torch.nn.functional.linear(x, a, b)
-            elif kind == "tanh":
-                x = torch.tanh(x)
-            elif kind == "relu":
-                x = torch.relu(x)
-            else:  # hardtanh
-                x = torch.clamp(x, a, b)
-        return x
-
-
-def build_mlp(name: str, layers: list[dict], tensors: dict[str, torch.Tensor]) -> Mlp:
-    """The part `name` from its JSON layer list and the tensors, checking every shape."""
-    built = []
-    for i, layer in enumerate(layers):
-        kind = layer["type"]
-        if kind == "linear":
-            w = tensors[f"{name}.{i}.weight"].float()
-            b = tensors[f"{name}.{i}.bias"].float() if layer["bias"] else None
-            if tuple(w.shape) != (layer["out"], layer["in"]) or (b is not None and tuple(b.shape) != (layer["out"],)):
-                raise ValueError(f"layer {name}.{i}: tensor shapes do not match {layer}")
-            built.append(("linear", w, b))
-        elif kind in ("tanh", "relu"):
-            built.append((kind, None, None))
-        elif kind == "hardtanh":
-            built.append((kind, float(layer["min"]), float(layer["max"])))
-        else:
-            raise ValueError(f"layer {name}.{i}: unknown type {kind!r}")
-    return Mlp(tuple(built))
-
-
-@dataclass(frozen=True)
-class ObsNorm:
-    """VecNormalize's observation transform clip((obs - mean) / sqrt(var + eps), -clip, clip); identity if empty."""
-
-    obs_dim: int
-    mean: torch.Tensor | None = None
-    var: torch.Tensor | None = None
-    clip: float = 0.0
-    epsilon: float = 0.0
-
-    def __call__(self, obs: np.ndarray) -> torch.Tensor:
-        x = torch.as_tensor(np.asarray(obs), dtype=torch.float64)
-        if x.ndim != 2 or x.shape[1] != self.obs_dim:
-            raise ValueError(f"expected a batch of observations of shape (n, {self.obs_dim}), got {tuple(x.shape)}")
-        if self.mean is not None:
-            x = torch.clamp((x - self.mean) / torch.sqrt(self.var + self.epsilon), -self.clip, self.clip)
-        return x.float()
-
-
-def build_norm(meta: dict, tensors: dict[str, torch.Tensor]) -> ObsNorm:
-    """The observation normalisation stored in a pair."""
-    obs_dim, norm = int(meta["obs_dim"]), meta["obs_norm"]
-    if norm is None:
-        return ObsNorm(obs_dim)
-    mean, var = tensors["obs_norm.mean"].double(), tensors["obs_norm.var"].double()
-    if mean.shape != (obs_dim,) or var.shape != (obs_dim,):
-        raise ValueError(f"normalisation statistics of shape {tuple(mean.shape)}, expected ({obs_dim},)")
-    return ObsNorm(obs_dim, mean, var, float(norm["clip"]), float(norm["epsilon"]))
-
-
-@dataclass(frozen=True)
-class Loaded:
-    """One pair as read: its JSON file and contents, normalisation, MLP parts and tensors."""
-
-    path: Path
-    meta: dict
-    norm: ObsNorm
-    parts: dict[str, Mlp]
-    tensors: dict[str, torch.Tensor]
-
-    def variant(self, key: str, needs: dict[str, tuple[str, ...]]) -> str:
-        """meta[key], one of needs' keys, whose required parts or tensors were all saved; else a clear error."""
-        value = self.meta.get(key)
-        if value not in needs:
-            raise ValueError(f"{self.path}: {key} must be one of {tuple(needs)}, got {value!r}")
-        missing = [n for n in needs[value] if n not in self.parts and n not in self.tensors]
-        if missing:
-            raise ValueError(f"{self.path}: {missing} missing for {key}={value!r}")
-        return value
-
-
-def read_pair(directory: Path, name: str) -> Loaded:
-    """NAME.json and NAME.pt, or FileNotFoundError/ValueError naming the bad file."""
-    js = directory / f"{name}.json"
-    meta = _read_json(js)
-    if not isinstance(meta.get("sha256"), str):
-        raise ValueError(f"{js}: missing key 'sha256'")
-    tensors = _read_tensors(directory / f"{name}.pt", meta["sha256"])
-    try:
-        parts = {p: build_mlp(p, layers, tensors) for p, layers in meta["parts"].items()}
-        return Loaded(js, meta, build_norm(meta, tensors), parts, tensors)
-    except KeyError as e:
-        raise ValueError(f"{js}: missing key {e} (in the JSON, or as a tensor in {name}.pt)") from e
-    except (TypeError, AttributeError, ValueError) as e:
-        raise ValueError(f"{js}: malformed ({e})") from e
-
-
-class Networks:
-    """An exported run evaluated with plain torch: policy, value, and the learned reward (if saved)."""
-
-    def __init__(self, directory: Path):
-        self.directory = Path(directory)
-        self._policy = read_pair(self.directory, "policy")
-        bounds = ("pi", "action.low", "action.high")
-        self.output = self._policy.variant("output", {"argmax": ("pi",), "clip": bounds, "tanh_rescale": bounds})
-        self._value = read_pair(self.directory, "value")
-        self.value_form = self._value.variant("form", {"state": ("v",), "q_of_policy": ("pi", "q1")})
-        self._reward = self._read_reward()
-
-    def _read_reward(self) -> Loaded | None:
-        """The reward pair, None if none was saved."""
-        if not any((self.directory / f"reward.{ext}").exists() for ext in ("json", "pt")):
-            return None
-        loaded = read_pair(self.directory, "reward")
-        loaded.variant("kind", {"airl": (), "gail": ()})
-        loaded.variant("form", {"state": ("r_psi", "h"), "transition": ("net",)})
-        for key in ("gamma", "absorbing", "absorbing_value", "absorbing_reward"):
-            if key not in loaded.meta:
-                raise ValueError(f"{loaded.path}: missing key {key!r}")
-        return loaded
-
-    def policy(self, obs: np.ndarray) -> np.ndarray:
-        """Deterministic actions for a batch of raw observations."""
-        p = self._policy
-        with torch.no_grad():
-            out = p.parts["pi"](p.norm(obs))
-            if self.output == "argmax":
-                return out.argmax(dim=-1).numpy()
-            low, high = p.tensors["action.low"], p.tensors["action.high"]
-            if self.output == "clip":
-                return torch.clamp(out.double(), low, high).numpy().astype(np.float32)
-            return (low + 0.5 * (torch.tanh(out).double() + 1.0) * (high - low)).numpy().astype(np.float32)
-
-    def value(self, obs: np.ndarray) -> np.ndarray:
-        """The generator's state value V(s) for a batch of raw observations (SAC: Q1(s, a*))."""
-        v = self._value
-        with torch.no_grad():
-            x = v.norm(obs)
-            if self.value_form == "state":
-                return v.parts["v"](x).squeeze(-1).numpy()
-            action = torch.tanh(v.parts["pi"](x))
-            return v.parts["q1"](torch.cat([x, action], dim=-1)).squeeze(-1).numpy()
-
-    def _reward_pair(self) -> Loaded:
-        """The reward pair, or a clear error if none was saved."""
-        if self._reward is None:
-            raise ValueError(f"{self.directory}: no reward network was saved (reward.json is missing)")
-        return self._reward
-
-    @property
-    def kind(self) -> str | None:
-        """'airl', 'gail', or None without a reward network."""
-        return None if self._reward is None else self._reward.meta["kind"]
-
-    @property
-    def gamma(self) -> float:
-        """The discount saved with the reward."""
-        return float(self._reward_pair().meta["gamma"])
-
-    def _states(self, r: Loaded, obs: np.ndarray) -> torch.Tensor:
-        """Normalised observations with a zero absorbing flag appended."""
-        x = r.norm(obs)
-        return torch.cat([x, torch.zeros_like(x[:, :1])], dim=-1)
-
-    def reward(self, obs: np.ndarray) -> np.ndarray:
-        """Per-step reward (T,) of raw observations (T+1, d): AIRL r_psi(s_t), GAIL logit(s_t, s_t+1)."""
-        r = self._reward_pair()
-        with torch.no_grad():
-            s = self._states(r, obs)
-            if r.meta["form"] == "state":
-                return r.parts["r_psi"](s[:-1]).squeeze(-1).numpy()
-            return r.parts["net"](torch.cat([s[:-1], s[1:]], dim=-1)).squeeze(-1).numpy()
-
-    def potential(self, obs: np.ndarray) -> np.ndarray:
-        """AIRL's shaping potential h(s) of a batch of raw observations."""
-        r = self._reward_pair()
-        if r.meta["form"] != "state":
-            raise ValueError(f"{self.directory / 'reward.json'}: only shaped AIRL has a shaping potential h")
-        with torch.no_grad():
-            return r.parts["h"](self._states(r, obs)).squeeze(-1).numpy()
-
-    def absorbing_reward(self) -> float:
-        """The learned reward of the absorbing state (a learned constant), in the same form as reward()."""
-        return float(self._reward_pair().meta["absorbing_reward"])
-
-    def learned_return(self, obs: np.ndarray, terminated: bool, gamma: float | None = None) -> float:
-        """sum_t gamma^t r_t, plus, if the episode terminated, gamma^T r(absorbing) / (1 - gamma) for what follows."""
-        meta = self._reward_pair().meta
-        g = float(meta["gamma"]) if gamma is None else float(gamma)
-        r = self.reward(obs).astype(np.float64)
-        ret = float(np.sum(g ** np.arange(len(r)) * r))
-        if terminated and meta["absorbing"]:
-            ret += g ** len(r) * self.absorbing_reward() / max(1.0 - g, 1e-3)
-        return ret
-
-
-def load_networks(directory: Path) -> Networks:
-    """The networks save_networks wrote into directory (json + torch.load(weights_only=True) only)."""
-    return Networks(Path(directory))
