@@ -13,9 +13,8 @@ import argparse
 import time
 
 from fastrl.agents.bc import action_accuracy, behaviour_clone
-from fastrl.agents.expert import ScriptedExpert
 from fastrl.agents.sb3 import build_model, make_vec_env, policy_function
-from fastrl.data.replay import demonstration_pairs, rollout_trajectory
+from fastrl.data.replay import demonstration_pairs, expert_trajectories
 from fastrl.env import FastEnv
 from fastrl.runner.evaluate import evaluate
 from fastrl.spec import load_spec
@@ -29,9 +28,7 @@ def main() -> None:
     ap.add_argument("--epochs", type=int, default=30)
     args = ap.parse_args()
     spec = load_spec(args.spec)
-    env = FastEnv(spec)
-    expert = ScriptedExpert(env)
-    trajs = [rollout_trajectory(env, expert.act, s, {"source": "expert"}, expert.reset)[0] for s in range(args.demos)]
+    trajs = expert_trajectories(FastEnv(spec), range(args.demos))
     obs, actions = demonstration_pairs(FastEnv(spec), trajs)
     venv = make_vec_env(spec, 1, 0)
     model = build_model(spec, venv)

@@ -61,18 +61,14 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=2)
     args = ap.parse_args()
 
-    from fastrl.agents.expert import ScriptedExpert
-    from fastrl.data.replay import expert_transitions, rollout_trajectory
+    from fastrl.data.replay import expert_trajectories, expert_transitions
     from fastrl.env import FastEnv
 
     cache = {}
 
     def demos(spec):
         if "t" not in cache:
-            env = FastEnv(spec)
-            expert = ScriptedExpert(env)
-            trajs = [rollout_trajectory(env, expert.act, s, {"source": "expert"}, expert.reset)[0] for s in range(20)]
-            cache["t"] = expert_transitions(FastEnv(spec), trajs)
+            cache["t"] = expert_transitions(FastEnv(spec), expert_trajectories(FastEnv(spec), range(20)))
         return cache["t"]
 
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "

@@ -5,9 +5,8 @@ import pytest
 import torch
 
 import fastrl
-from fastrl.agents.expert import ScriptedExpert
 from fastrl.agents.sb3 import build_model, make_vec_env
-from fastrl.data.replay import expert_transitions, rollout_trajectory
+from fastrl.data.replay import expert_trajectories, expert_transitions
 from fastrl.irl import AdversarialCallback, Discriminator
 from fastrl.irl.discriminator import absorbing_states, augment
 from fastrl.irl.fitting import DiscriminatorFit, make_batch
@@ -23,10 +22,7 @@ TINY = ["train.normalize.reward=false", "train.n_envs=2", "train.ppo.n_steps=64"
 def expert_data():
     """Expert transitions of two TraceLines demonstrations."""
     spec = load_spec(spec_file("tracelines"), TINY)
-    env = fastrl.make(spec)
-    expert = ScriptedExpert(env)
-    trajs = [rollout_trajectory(env, expert.act, s, {"source": "expert"}, expert.reset)[0] for s in range(2)]
-    return spec, expert_transitions(fastrl.make(spec), trajs)
+    return spec, expert_transitions(fastrl.make(spec), expert_trajectories(fastrl.make(spec), range(2)))
 
 
 @pytest.mark.parametrize("kind", ["gail", "airl"])

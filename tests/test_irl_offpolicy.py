@@ -5,9 +5,8 @@ import pytest
 import torch
 
 import fastrl
-from fastrl.agents.expert import ScriptedExpert
 from fastrl.agents.sb3 import build_model, make_vec_env
-from fastrl.data.replay import expert_transitions, rollout_trajectory
+from fastrl.data.replay import expert_trajectories, expert_transitions
 from fastrl.irl import Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
 from fastrl.irl.discriminator import augment
 from fastrl.spec import load_spec
@@ -23,10 +22,7 @@ TINY = ["actions.mode=continuous", "train.algo=SAC", "train.n_envs=2", "train.sa
 def setup():
     """A tiny SAC generator with the relabelling buffer and two continuous expert demonstrations."""
     spec = load_spec(spec_file("tracelines"), TINY)
-    env = fastrl.make(spec)
-    expert = ScriptedExpert(env)
-    trajs = [rollout_trajectory(env, expert.act, s, {"source": "expert"}, expert.reset)[0] for s in range(2)]
-    return spec, expert_transitions(fastrl.make(spec), trajs)
+    return spec, expert_transitions(fastrl.make(spec), expert_trajectories(fastrl.make(spec), range(2)))
 
 
 def train(spec, expert, current_rollout: bool, spectral: bool = False, steps: int = 240):

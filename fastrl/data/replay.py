@@ -6,6 +6,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..agents.expert import ScriptedExpert
 from ..irl.fitting import Transitions
 from ..spec import spec_hash
 from .trajectory import Trajectory
@@ -31,6 +32,13 @@ def rollout_trajectory(env, policy: Callable, seed: int, meta: dict,
     meta = {"spec": u.task_spec.name, "spec_hash": spec_hash(u.task_spec), "seed": seed,
             "subtasks": info["subtask"], "subtasks_total": info["subtasks_total"], **meta}
     return Trajectory(np.array(times), np.array(coords), meta, np.array(actions)), np.array(observations)
+
+
+def expert_trajectories(env, seeds) -> list[Trajectory]:
+    """Scripted-expert demonstrations, one episode per seed."""
+    expert = ScriptedExpert(env)
+    meta = {"source": "expert", "subject": "scripted-expert"}
+    return [rollout_trajectory(env, expert.act, s, meta, expert.reset)[0] for s in seeds]
 
 
 def replay(env, traj: Trajectory) -> tuple[np.ndarray, list[dict], np.ndarray]:
