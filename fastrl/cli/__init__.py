@@ -10,11 +10,11 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from . import __version__
-from .spec import SpecError, SpecIssue, json_schema, load_spec
+from .. import __version__
+from ..spec import SpecError, SpecIssue, json_schema, load_spec
 
 if TYPE_CHECKING:
-    from .model import CompiledTask
+    from ..model import CompiledTask
 
 app = typer.Typer(
     name="fastrl",
@@ -46,7 +46,7 @@ SetOpt = Annotated[
 
 def load(path: Path, overrides: list[str] | None = None) -> CompiledTask:
     """Validate and compile a spec; every problem (MuJoCo compile errors too) raises SpecError."""
-    from .model import compile_task  # imports mujoco: only for commands that need it
+    from ..model import compile_task  # imports mujoco: only for commands that need it
 
     spec = load_spec(path, overrides or ())
     try:
@@ -178,7 +178,7 @@ def demos(
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
 ) -> None:
     """Write demonstrations (trajectory .npz files) from a trained run or the scripted expert."""
-    from .runner.demos import write_demos
+    from ..runner.demos import write_demos
 
     if (source is None) == (expert is None):
         err.print("give RUN_DIR, or --expert SPEC", markup=False)
@@ -246,7 +246,7 @@ def irl(
 def train_and_report(spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool,
                      timesteps: int | None) -> None:
     """Start (or resume) a run, turn interruptions and bad input into messages, print the evaluation."""
-    from .runner import EvaluationInterrupted, RunInterrupted, resume_run, start_run
+    from ..runner import EvaluationInterrupted, RunInterrupted, resume_run, start_run
 
     try:
         if resume is not None:
@@ -294,7 +294,7 @@ def eval_(
     output: Annotated[Path | None, typer.Option("-o", "--output", help="write the figures as JSON")] = None,
 ) -> None:
     """Re-evaluate a saved run (deterministic episodes), or the scripted expert on a spec."""
-    from .runner import evaluate_expert, evaluate_saved
+    from ..runner import evaluate_expert, evaluate_saved
 
     if (run_dir is None) == (expert is None):
         err.print("give RUN_DIR, or --expert SPEC", markup=False)
@@ -334,7 +334,7 @@ def runs_(root: RunsOpt = Path("runs"),
     """List runs with their headline figures, newest first."""
     from rich.table import Table
 
-    from .runner.rundir import list_runs
+    from ..runner.rundir import list_runs
 
     rows = list_runs(root)
     if as_json:
@@ -355,5 +355,5 @@ def runs_(root: RunsOpt = Path("runs"),
     out.print(table)
 
 
-if __name__ == "__main__":
-    app()
+# commands in their own modules register themselves on `app`
+from . import cohort, poses, score  # noqa: E402,F401

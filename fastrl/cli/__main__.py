@@ -1,0 +1,5 @@
+"""`python -m fastrl.cli`."""
+
+from . import app
+
+app()

@@ -1,0 +1,5 @@
+"""Tracked scope poses to trajectories (`fastrl import-poses`)."""
+
+from __future__ import annotations
+
+from . import app  # noqa: F401  (commands register on the shared app)
