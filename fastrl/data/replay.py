@@ -8,7 +8,7 @@ import numpy as np
 
 from ..agents.expert import ScriptedExpert
 from ..irl.fitting import Transitions
-from ..spec import spec_hash
+from ..spec import spec_hash, task_hash
 from .trajectory import Trajectory
 
 
@@ -29,7 +29,8 @@ def rollout_trajectory(env, policy: Callable, seed: int, meta: dict,
         coords.append(u.portal_coordinates())
         observations.append(obs)
         done = term or trunc
-    meta = {"spec": u.task_spec.name, "spec_hash": spec_hash(u.task_spec), "seed": seed,
+    meta = {"spec": u.task_spec.name, "spec_hash": spec_hash(u.task_spec),
+            "task_hash": task_hash(u.task_spec), "seed": seed,
             "subtasks": info["subtask"], "subtasks_total": info["subtasks_total"], **meta}
     return Trajectory(np.array(times), np.array(coords), meta, np.array(actions)), np.array(observations)
 

@@ -64,6 +64,8 @@ class Trajectory:
     def load(cls, path: Path) -> Trajectory:
         """Read and check a .npz; TrajectoryError names the file and the problem."""
         path = Path(path)
+        if path.exists() and not zipfile.is_zipfile(path):
+            raise TrajectoryError(f"{path}: not a .npz archive")
         try:
             with np.load(path, allow_pickle=False) as z:
                 missing = {"time", "portal", "meta"} - set(z.files)

@@ -211,6 +211,12 @@ class Networks:
         return None if self._reward is None else self._reward.meta["kind"]
 
     @property
+    def identity(self) -> str:
+        """Checksums of the saved value and reward tensors: changes whenever the networks do."""
+        reward = "" if self._reward is None else self._reward.meta["sha256"][:16]
+        return f"{self._value.meta['sha256'][:16]}-{reward}"
+
+    @property
     def gamma(self) -> float:
         """The discount saved with the reward."""
         return float(self._reward_pair().meta["gamma"])

@@ -18,10 +18,17 @@ def spec_hash(spec: TaskSpec) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+def task_hash(spec: TaskSpec) -> str:
+    """SHA-256 of what a trajectory's replay depends on: scene, scope, task and episode (16 hex digits)."""
+    world = spec.model_dump(mode="json", include={"scene", "scope", "task", "episode"})
+    text = json.dumps(world, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
 def json_schema() -> dict:
     """JSON Schema of a task spec, for editors."""
     return TaskSpec.model_json_schema()
 
 
 __all__ = ["Avatar", "Cue", "DomeScene", "Line", "Portal", "Scope", "SpecError", "SpecIssue", "Task",
-           "TaskSpec", "apply_overrides", "json_schema", "load_model", "load_spec", "read_yaml", "spec_hash"]
+           "TaskSpec", "apply_overrides", "json_schema", "load_model", "load_spec", "read_yaml", "spec_hash", "task_hash"]

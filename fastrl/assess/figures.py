@@ -1,0 +1,132 @@
+"""Assessment pictures as PNG: paths coloured by learned value (Fig. 6), deviation from the expert (Fig. 7),
+score distributions per group."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .kinematic import deviation_by_progress
+from .scoring import TrajectoryScores
+
+MAX_PANELS = 6
+
+
+def group_of(s: TrajectoryScores, by: str) -> str:
+    """The group label a trajectory is drawn under."""
+    return f"level {s.skill}" if by == "skill" else s.subject
+
+
+def _groups(scored: list[TrajectoryScores], by: str) -> dict[str, list[TrajectoryScores]]:
+    """Trajectories by group, best-labelled first (highest skill, else by name)."""
+    groups: dict[str, list[TrajectoryScores]] = {}
+    for s in scored:
+        groups.setdefault(group_of(s, by), []).append(s)
+    return dict(sorted(groups.items(), key=lambda kv: (-(kv[1][0].skill or 0), kv[0])))
+
+
+def deviations(scored: list[TrajectoryScores], reference: dict) -> dict[str, np.ndarray]:
+    """Per trajectory: distance (mm) to the expert's path on the same seed, at each percent of the procedure."""
+    out = {}
+    for s in scored:
+        ref = reference.get(int(s.meta.get("seed", 0)))
+        if ref is not None:
+            out[s.name] = 1000.0 * deviation_by_progress(s.tip, s.time, ref[1], ref[0])
+    return out
+
+
+def plot_paths(scored: list[TrajectoryScores], by: str, path: Path, radius: float) -> Path:
+    """Fig. 6: tip paths projected on the dome's XY plane, coloured by learned value (or by time)."""
+    plt = _pyplot()
+
+    groups = list(_groups(scored, by).items())[:MAX_PANELS]
+    fig, axes = plt.subplots(1, len(groups), figsize=(3.3 * len(groups), 3.6), squeeze=False, sharex=True,
+                             sharey=True)
+    xy_all = np.concatenate([s.tip[:, :2] for s in scored]) * 1000
+    (x0, y0), (x1, y1) = xy_all.min(axis=0) - 10, xy_all.max(axis=0) + 10
+    with_values = [s.values for s in scored if s.values is not None]
+    lo, hi = (np.percentile(np.concatenate(with_values), [2, 98]) if with_values else (0.0, 1.0))
+    sc = None
+    for ax, (name, members) in zip(axes[0], groups):
+        ax.add_patch(plt.Circle((0, 0), radius * 1000, fill=False, color="0.6", lw=1))
+        for s in members:
+            xy = s.tip[:, :2] * 1000
+            ax.plot(xy[:, 0], xy[:, 1], color="0.8", lw=0.5, zorder=1)
+            colour = s.values if s.values is not None else s.time
+            sc = ax.scatter(xy[:, 0], xy[:, 1], c=colour, s=3, cmap="viridis", vmin=lo if s.values is not None
+                            else None, vmax=hi if s.values is not None else None, zorder=2)
+            ax.scatter(*xy[0], marker="*", s=60, color="k", zorder=3)
+            ax.scatter(*xy[-1], marker="*", s=60, color="tab:red", zorder=3)
+        ax.set(title=f"{name} (n={len(members)})", xlabel="x (mm)", aspect="equal", xlim=(x0, x1), ylim=(y0, y1))
+    axes[0][0].set_ylabel("y (mm)")
+    if sc is not None:
+        fig.colorbar(sc, ax=axes[0].tolist(), label="learned value V(s)" if with_values else "time (s)", shrink=0.8)
+    fig.suptitle("Tip paths on the dome's XY plane (grey circle: dome; black star: start, red star: end)",
+                 fontsize=10)
+    return _save(fig, path)
+
+
+def plot_deviation(scored: list[TrajectoryScores], devs: dict[str, np.ndarray], by: str, path: Path) -> Path:
+    """Fig. 7: deviation from the expert's path over the percentage of the procedure, mean and band per group."""
+    plt = _pyplot()
+
+    fig, ax = plt.subplots(figsize=(6.4, 3.8))
+    for name, members in _groups(scored, by).items():
+        rows = np.array([devs[s.name] for s in members if s.name in devs])
+        if len(rows) == 0:
+            continue
+        pct = np.linspace(0, 100, rows.shape[1])
+        mean = rows.mean(axis=0)
+        line = ax.plot(pct, mean, label=f"{name} ({rows.mean():.0f} mm)")[0]
+        ax.fill_between(pct, np.percentile(rows, 25, axis=0), np.percentile(rows, 75, axis=0),
+                        color=line.get_color(), alpha=0.15)
+    ax.set(xlabel="procedure completed (% of the attempt's duration)", ylabel="distance to expert path (mm)",
+           title="Deviation from the scripted expert on the same seed (mean, IQR)")
+    ax.legend(fontsize=8)
+    return _save(fig, path)
+
+
+def plot_distributions(report: dict, path: Path) -> Path:
+    """Each score's distribution per group (strip and box plots)."""
+    plt = _pyplot()
+
+    keys = report["scores"]
+    rows = report["trajectories"]
+    by = report["grouped_by"]
+    label = (lambda r: f"L{r['skill']}") if by == "skill" else (lambda r: r["subject"])
+    names = [g["subject"] for g in report["groups"]]
+    names = [n.replace("level ", "L") for n in names] if by == "skill" else names
+    fig, axes = plt.subplots(1, len(keys), figsize=(2.6 * len(keys), 3.4), squeeze=False)
+    for ax, k in zip(axes[0], keys):
+        data = [[r[k] for r in rows if label(r) == n and r[k] is not None] for n in names]
+        ax.boxplot(data, showfliers=False)
+        for i, d in enumerate(data, start=1):
+            ax.scatter(np.full(len(d), i) + np.linspace(-0.15, 0.15, len(d)), d, s=6, alpha=0.6)
+        ax.set_xticks(range(1, len(names) + 1), names, rotation=45, fontsize=7)
+        rank = report["ranking"].get(k)
+        ax.set_title(k + (f"\ntau-b {rank['kendall_tau_b']:.2f}" if rank and rank["kendall_tau_b"] is not None
+                          else ""), fontsize=9)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def _pyplot():
+    """matplotlib.pyplot on the file-only Agg backend (no display needed)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig, path: Path) -> Path:
+    """Write and close a figure."""
+    plt = _pyplot()
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path

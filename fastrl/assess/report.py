@@ -1,0 +1,88 @@
+"""Score many files and gather the results: per trajectory, per group, and the ranking against labels."""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+from ..data.trajectory import TrajectoryError
+from .ranking import rank_correlations, subject_table
+from .scoring import HIGHER_IS_BETTER, NORMALISED, Scorer, TrajectoryScores
+
+COLUMNS = ("heuristic", "reward", "value", "subtasks", "path_length", "time", "smoothness")
+
+
+def trajectory_files(paths: Iterable[Path]) -> list[Path]:
+    """The .npz files named, and those inside named folders (sorted); missing paths are kept to be reported."""
+    files = []
+    for p in map(Path, paths):
+        files += sorted(p.glob("*.npz")) if p.is_dir() else [p]
+    return files
+
+
+def score_files(scorer: Scorer, files: list[Path],
+                on_file: Callable[[Path], None] | None = None) -> tuple[list[TrajectoryScores], list[str]]:
+    """Score every file; a bad or foreign file becomes a message naming it, and the rest are still scored."""
+    scored, problems = [], []
+    for f in files:
+        try:
+            scored.append(scorer.score_file(f))
+        except (TrajectoryError, ValueError, OSError) as e:
+            text = str(e)
+            problems.append(text if str(f) in text else f"{f}: {text}")
+        if on_file is not None:
+            on_file(f)
+    return scored, problems
+
+
+def row(s: TrajectoryScores) -> dict:
+    """One flat row: normalised learned and heuristic scores, raw kinematic ones, and the labels."""
+    out = {"file": s.name, "subject": s.subject, "skill": s.skill, "source": s.meta.get("source"),
+           "success": s.meta.get("success")}
+    for k in COLUMNS:
+        out[k] = s.normalised.get(k) if k in NORMALISED else s.scores.get(k)
+        if k in NORMALISED:
+            out[k + "_raw"] = s.scores.get(k)
+    return out
+
+
+def group_key(rows: list[dict]) -> str:
+    """Group by subject where subjects repeat, else by skill label where there is one, else by subject."""
+    subjects = [r["subject"] for r in rows]
+    if len(set(subjects)) < len(subjects) or all(r["skill"] is None for r in rows):
+        return "subject"
+    return "skill"
+
+
+def build_report(scored: list[TrajectoryScores], references: dict, problems: list[str], learned: bool) -> dict:
+    """Everything a reader or a machine needs: references, rows, groups, rankings, problems."""
+    rows = [row(s) for s in scored]
+    keys = tuple(k for k in COLUMNS if learned or k not in ("reward", "value"))
+    by = group_key(rows) if rows else "subject"
+    grouped = [{**r, "subject": f"level {r['skill']}" if by == "skill" else r["subject"]} for r in rows]
+    report = {"references": references, "grouped_by": by, "scores": list(keys),
+              "normalisation": "heuristic, reward, value: 0 = random policy, 1 = scripted expert; "
+                               "subtasks: fraction done; path_length m, time s, smoothness = log dimensionless jerk",
+              "groups": subject_table(grouped, keys), "trajectories": rows, "problems": problems, "ranking": {}}
+    labelled = [r for r in rows if isinstance(r["skill"], int | float)]
+    if len({r["skill"] for r in labelled}) > 1:
+        for k in keys:
+            vals = [r[k] if r[k] is not None else float("nan") for r in labelled]
+            sign = 1.0 if HIGHER_IS_BETTER[k] else -1.0  # rank so that "better" agrees with a higher label
+            result = rank_correlations([sign * v for v in vals], [r["skill"] for r in labelled])
+            result["level_means"] = {level: sign * m for level, m in result["level_means"].items()}
+            report["ranking"][k] = {**result, "higher_is_better": HIGHER_IS_BETTER[k]}
+    return report
+
+
+def csv_text(report: dict) -> str:
+    """The per-trajectory rows as CSV."""
+    rows = report["trajectories"]
+    buf = io.StringIO()
+    if rows:
+        writer = csv.DictWriter(buf, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return buf.getvalue()

@@ -1,0 +1,123 @@
+"""Score one trajectory by replaying it: heuristic return, learned reward and value, kinematics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..data.replay import replay
+from ..data.trajectory import Trajectory
+from ..env.fast_env import FastEnv
+from ..model.kinematics import Kinematics
+from ..spec import task_hash
+from ..spec.models import TaskSpec
+from .kinematic import log_dimensionless_jerk, path_length
+
+SCORES = ("heuristic", "reward", "value", "subtasks", "path_length", "time", "smoothness")
+NORMALISED = ("heuristic", "reward", "value")  # 0 = random policy, 1 = scripted expert
+HIGHER_IS_BETTER = {"heuristic": True, "reward": True, "value": True, "subtasks": True, "path_length": False,
+                    "time": False, "smoothness": True}
+
+
+@dataclass
+class TrajectoryScores:
+    """The scores of one replayed trajectory, and the per-sample arrays the pictures need."""
+
+    name: str
+    meta: dict
+    scores: dict[str, float]             # SCORES -> raw value (None where no learned model)
+    time: np.ndarray                     # (n,) s, the replayed samples
+    tip: np.ndarray                      # (n, 3) camera (tip) positions
+    values: np.ndarray | None = None     # (n,) learned value of each state
+    normalised: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def subject(self) -> str:
+        """The subject named in the metadata, or the file name."""
+        return str(self.meta.get("subject") or self.name)
+
+    @property
+    def skill(self):
+        """The ground-truth skill label, if the file carries one."""
+        return self.meta.get("skill")
+
+
+def value_gain(values: np.ndarray, gamma: float) -> float:
+    """gamma^T V(s_T) - V(s_0): the discounted worth of where an attempt ended over where it began.
+
+    Only the endpoints count, so states off the experts' distribution (where a critic extrapolates) in the
+    middle of an attempt cannot inflate it; an attempt that reaches valuable states sooner scores higher.
+    """
+    return float(gamma ** (len(values) - 1) * values[-1] - values[0])
+
+
+def foreign_problem(traj: Trajectory, spec: TaskSpec) -> str | None:
+    """Why a trajectory belongs to another task than `spec`, or None."""
+    theirs = traj.meta.get("task_hash")
+    if theirs is not None and theirs != task_hash(spec):
+        return f"recorded in another task (task_hash {theirs}, expected {task_hash(spec)})"
+    name = traj.meta.get("spec")
+    if theirs is None and name is not None and name != spec.name:
+        return f"recorded in spec '{name}', not '{spec.name}'"
+    return None
+
+
+class Scorer:
+    """Replays trajectories in one compiled task and scores them; learned scores need a run's networks."""
+
+    def __init__(self, spec: TaskSpec, networks=None):
+        self.spec, self.networks = spec, networks
+        self.env = FastEnv(spec)
+        self.kin = Kinematics(self.env.task)
+        self.learned = networks is not None and networks.kind is not None
+
+    def tip_path(self, portal: np.ndarray) -> np.ndarray:
+        """Camera positions along portal coordinates (forward kinematics on a scratch copy)."""
+        return np.array([self.kin.camera(q)[0] for q in portal])
+
+    def score(self, traj: Trajectory, name: str = "") -> TrajectoryScores:
+        """Replay and score one trajectory."""
+        obs, infos, rewards = replay(self.env, traj)
+        n = len(obs)
+        time, tip = traj.time[:n] - traj.time[0], self.tip_path(traj.portal[:n])
+        last = infos[-1]
+        scores = {
+            "heuristic": float(rewards.sum()),
+            "subtasks": last["subtask"] / max(1, last["subtasks_total"]),
+            "path_length": path_length(tip),
+            "time": float(time[-1]),
+            "smoothness": log_dimensionless_jerk(tip, time),
+            "reward": None, "value": None,
+        }
+        values = None
+        if self.learned:
+            scores["reward"] = float(self.networks.reward(obs).sum())
+            values = self.networks.value(obs).astype(float)
+            scores["value"] = value_gain(values, self.networks.gamma)
+        meta = {**traj.meta, "success": bool(last["success"]), "subtasks_done": int(last["subtask"]),
+                "subtasks_total": int(last["subtasks_total"])}
+        return TrajectoryScores(name or str(traj.meta.get("subject", "")), meta, scores, time, tip, values)
+
+    def score_file(self, path: Path) -> TrajectoryScores:
+        """Load, check and score one file; TrajectoryError or ValueError name the file and the problem."""
+        from ..data.trajectory import TrajectoryError
+
+        traj = Trajectory.load(path)
+        problem = foreign_problem(traj, self.spec)
+        if problem:
+            raise TrajectoryError(f"{path}: {problem}")
+        return self.score(traj, Path(path).stem)
+
+
+def normalise(scored: list[TrajectoryScores], references: dict) -> None:
+    """Fill each score's `normalised` with (x - random) / (expert - random) for the NORMALISED keys."""
+    for s in scored:
+        for key in NORMALISED:
+            lo, hi, x = references["random"].get(key), references["expert"].get(key), s.scores.get(key)
+            if x is None or lo is None or hi is None or abs(hi - lo) < 1e-12:
+                s.normalised[key] = None
+            else:
+                s.normalised[key] = (x - lo) / (hi - lo)
+        s.normalised["subtasks"] = s.scores["subtasks"]

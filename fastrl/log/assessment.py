@@ -1,0 +1,104 @@
+"""An assessment in Rerun: scored paths in 3D and on the XY plane coloured by value, deviation curves, tables."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+
+from ..model.compiler import CompiledTask
+from .scene import log_scene
+
+
+def _colours(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """viridis-like RGB (uint8) of values scaled from [lo, hi]."""
+    from matplotlib import colormaps
+
+    t = np.clip((values - lo) / max(hi - lo, 1e-12), 0.0, 1.0)
+    return (colormaps["viridis"](t)[:, :3] * 255).astype(np.uint8)
+
+
+def _slug(text: str) -> str:
+    """An entity-path-safe name."""
+    return re.sub(r"[^A-Za-z0-9_-]+", "_", str(text)).strip("_") or "x"
+
+
+def markdown_table(report: dict) -> str:
+    """The group table and the ranking as markdown."""
+    keys = report["scores"]
+    lines = [f"## Scores by {report['grouped_by']}", "", "| group | n | " + " | ".join(keys) + " |",
+             "|---|---|" + "---|" * len(keys)]
+    for g in report["groups"]:
+        cells = [("-" if g[k] is None else f"{g[k]:.3g} ± {g[k + '_sd']:.2g}") for k in keys]
+        lines.append(f"| {g['subject']} | {g['n']} | " + " | ".join(cells) + " |")
+    if report["ranking"]:
+        lines += ["", "## Ranking against skill labels", "", "| score | Spearman rho [95% CI] | Kendall tau-b [95% CI] |"
+                  " levels in order |", "|---|---|---|---|"]
+        for k, r in report["ranking"].items():
+            def fmt(v, ci):
+                return "-" if v is None else f"{v:.2f}" + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "")
+            lines.append(f"| {k} | {fmt(r['spearman'], r['spearman_ci'])} | {fmt(r['kendall_tau_b'], r['kendall_ci'])}"
+                         f" | {'yes' if r['levels_in_order'] else 'no'} |")
+    lines += ["", report["normalisation"]]
+    if report["problems"]:
+        lines += ["", "## Files not scored", ""] + [f"- {p}" for p in report["problems"]]
+    return "\n".join(lines)
+
+
+def log_assessment(path: Path, recording_id: str, task: CompiledTask, scored, report: dict,
+                   deviations: dict[str, np.ndarray], group_of) -> Path:
+    """Write an .rrd (same recording id as the run, so the viewer shows it with the run) and return its path."""
+    rec = rr.RecordingStream("fastrl", recording_id=recording_id)
+    rec.set_log_time_enabled(False)
+    rec.save(path)
+    try:
+        log_scene(rec, task, root="world")
+        values = [s.values for s in scored if s.values is not None]
+        lo, hi = np.percentile(np.concatenate(values), [2, 98]) if values else (0.0, 1.0)
+        for s in scored:
+            base = f"{_slug(group_of(s))}/{_slug(s.name)}"
+            v = s.values if s.values is not None else s.time
+            colours = _colours(v, lo, hi) if s.values is not None else _colours(v, v.min(), v.max())
+            rec.log(f"world/assessment/{base}", rr.Points3D(s.tip, colors=colours, radii=0.0008), static=True)
+            rec.log(f"world/assessment/{base}/path", rr.LineStrips3D([s.tip], colors=[[200, 200, 200]],
+                                                                     radii=0.0002), static=True)
+            rec.log(f"assessment/xy/{base}", rr.Points2D(s.tip[:, :2] * [1000, -1000], colors=colours, radii=0.4),
+                    static=True)
+            if s.name in deviations:
+                d = deviations[s.name]
+                rec.log(f"assessment/deviation/{base}", rr.SeriesLines(names=s.name, widths=1.0), static=True)
+                rec.send_columns(f"assessment/deviation/{base}",
+                                 indexes=[rr.TimeColumn("percent", sequence=np.arange(len(d)))],
+                                 columns=rr.Scalars.columns(scalars=d))
+        for k in report["scores"]:
+            means = [g[k] if g[k] is not None else np.nan for g in report["groups"]]
+            rec.log(f"assessment/scores/{k}", rr.BarChart(np.nan_to_num(np.array(means, float))), static=True)
+        rec.log("assessment/summary", rr.TextDocument(markdown_table(report), media_type=rr.MediaType.MARKDOWN),
+                static=True)
+        rec.send_blueprint(_blueprint(report))
+    finally:
+        rec.flush()
+        rec.disconnect()
+    return Path(path)
+
+
+def _blueprint(report: dict) -> rrb.Blueprint:
+    """3D paths and the XY projection on top; deviation curves and the table below."""
+    bars = [rrb.BarChartView(origin=f"/assessment/scores/{k}", name=k) for k in report["scores"]]
+    return rrb.Blueprint(
+        rrb.Vertical(
+            rrb.Horizontal(
+                rrb.Spatial3DView(origin="/world", name="paths by learned value (3D)"),
+                rrb.Spatial2DView(origin="/assessment/xy", name="XY projection (mm, y up)"),
+            ),
+            rrb.Horizontal(
+                rrb.TimeSeriesView(origin="/assessment/deviation", name="deviation from expert (mm) by % done"),
+                rrb.TextDocumentView(origin="/assessment/summary", name="scores"),
+                rrb.Tabs(*bars, name="group means") if bars else rrb.Spacer(),
+            ),
+        ),
+        collapse_panels=True,
+    )

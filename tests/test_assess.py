@@ -1,0 +1,203 @@
+"""Scoring trajectories: kinematic scores, ranking statistics, replay scores and `fastrl score` end to end."""
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from fastrl.agents.expert import ScriptedExpert
+from fastrl.assess.kinematic import deviation_by_progress, log_dimensionless_jerk, path_length
+from fastrl.assess.ranking import rank_correlations
+from fastrl.assess.references import reference_scores
+from fastrl.assess.report import build_report, score_files
+from fastrl.assess.scoring import Scorer, normalise, value_gain
+from fastrl.cli import app
+from fastrl.data.replay import expert_trajectories, rollout_trajectory
+from fastrl.data.trajectory import Trajectory
+from fastrl.spec import load_spec
+
+from .conftest import spec_file
+from .test_irl_runner import sets
+from .test_runner import only_run, recorded, rrd_verify
+
+SHORT = ["episode.time_limit=8"]
+
+
+def _spec(name="tracelines", extra=()):
+    return load_spec(spec_file(name), overrides=[*SHORT, *extra])
+
+
+def degraded(scorer, seed: int, noise: float, level: int):
+    """The scripted expert with a share `noise` of its actions replaced by random ones."""
+    env, rng = scorer.env, np.random.default_rng(seed)
+    expert = ScriptedExpert(env)
+    env.action_space.seed(seed)
+
+    def act(obs):
+        return env.action_space.sample() if rng.random() < noise else expert.act(obs)
+
+    meta = {"source": "synthetic", "subject": f"L{level}-{seed}", "skill": level}
+    return rollout_trajectory(env, act, seed, meta, expert.reset)[0]
+
+
+# --- pure scores ------------------------------------------------------------------------------
+
+
+def test_path_length_of_a_known_polyline():
+    tip = np.array([[0, 0, 0], [3, 4, 0], [3, 4, 12]], float)
+    assert path_length(tip) == pytest.approx(5 + 12)
+
+
+def test_smoothness_prefers_a_minimum_jerk_reach_over_a_shaky_one():
+    t = np.linspace(0, 2, 201)
+    s = t / 2
+    smooth = np.stack([0.1 * (10 * s**3 - 15 * s**4 + 6 * s**5), np.zeros_like(t), np.zeros_like(t)], axis=1)
+    shaky = smooth + 0.0005 * np.sin(2 * np.pi * 8 * t)[:, None] * [0, 1, 0]
+    assert log_dimensionless_jerk(smooth, t) > log_dimensionless_jerk(shaky, t) + 1.0
+    assert np.isnan(log_dimensionless_jerk(np.zeros((10, 3)), np.arange(10.0)))
+
+
+def test_deviation_is_zero_against_itself_and_the_offset_otherwise():
+    t = np.linspace(0, 3, 50)
+    path = np.stack([t, t**2, 0 * t], axis=1)
+    assert np.allclose(deviation_by_progress(path, t, path, t), 0)
+    slower = deviation_by_progress(path + [0, 0, 0.01], t * 2, path, t)
+    assert slower.shape == (101,) and np.allclose(slower, 0.01)
+
+
+def test_value_gain_rewards_reaching_valuable_states_sooner():
+    quick, slow = np.array([-10.0, 0.0, 10.0]), np.array([-10.0, -5.0, 0.0, 5.0, 10.0])
+    assert value_gain(quick, 0.9) > value_gain(slow, 0.9)
+    assert value_gain(quick, 0.9) == pytest.approx(0.81 * 10 + 10)
+
+
+# --- ranking statistics on hand-made scores ---------------------------------------------------
+
+
+def test_ranking_of_perfectly_ordered_levels():
+    labels = np.repeat([1, 2, 3, 4, 5], 4)
+    scores = labels * 10.0 + np.tile([0, 1, 2, 3], 5)
+    r = rank_correlations(scores, labels, n_boot=200)
+    assert r["levels_in_order"] and r["kendall_tau_b_of_level_means"] == pytest.approx(1.0)
+    # tau-b with tied labels: every pair across levels is concordant, pairs within a level are ties
+    assert r["kendall_tau_b"] == pytest.approx(np.sqrt(160 / 190), abs=1e-9)
+    lo, hi = r["kendall_ci"]
+    assert lo <= r["kendall_tau_b"] <= hi
+    assert r["spearman"] > 0.9 and r["spearman_p"] < 1e-6
+
+
+def test_ranking_detects_a_reversed_and_a_swapped_level():
+    labels = np.repeat([1, 2, 3], 5)
+    assert rank_correlations(-labels + 0.01 * np.arange(15), labels, n_boot=50)["kendall_tau_b"] < -0.8
+    swapped = np.where(labels == 2, 3.5, labels).astype(float) + 0.01 * np.arange(15)
+    r = rank_correlations(swapped, labels, n_boot=50)
+    assert not r["levels_in_order"] and r["level_means"][2] > r["level_means"][3]
+
+
+def test_ranking_of_constant_scores_is_undefined_not_a_crash():
+    r = rank_correlations(np.ones(6), [1, 1, 2, 2, 3, 3], n_boot=20)
+    assert r["kendall_tau_b"] is None and r["spearman"] is None and not r["levels_in_order"]
+
+
+# --- replay scores ------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def scorer():
+    return Scorer(_spec())
+
+
+def test_expert_outscores_a_noisy_expert_and_references_normalise_to_0_and_1(scorer):
+    expert = expert_trajectories(scorer.env, [3])[0]
+    noisy = degraded(scorer, 3, 0.6, 1)
+    e, n = scorer.score(expert), scorer.score(noisy)
+    assert e.scores["heuristic"] > n.scores["heuristic"]
+    assert e.scores["subtasks"] > n.scores["subtasks"] and e.scores["time"] < n.scores["time"]
+    assert e.scores["reward"] is None and e.values is None  # no learned model without a run
+    refs = reference_scores(scorer, episodes=1)
+    assert refs["expert"]["subtasks"] == 1.0 and refs["random"]["heuristic"] < refs["expert"]["heuristic"]
+    ref_expert = scorer.score(expert_trajectories(scorer.env, [90000])[0])
+    normalise([ref_expert], refs)
+    assert ref_expert.normalised["heuristic"] == pytest.approx(1.0)
+
+
+def test_bad_and_foreign_files_are_reported_and_the_rest_scored(scorer, tmp_path):
+    good = expert_trajectories(scorer.env, [0])[0]
+    good.save(tmp_path / "good.npz")
+    other = Scorer(_spec("imagecentring"))
+    expert_trajectories(other.env, [0])[0].save(tmp_path / "other_task.npz")
+    (tmp_path / "garbage.npz").write_bytes(b"not an archive")
+    portal = good.portal.copy()
+    portal[3] = np.nan
+    np.savez(tmp_path / "nan_rows.npz", time=good.time, portal=portal, meta=json.dumps(good.meta))
+    np.savez(tmp_path / "wrong_shape.npz", time=good.time, portal=good.portal[:, :4], meta=json.dumps(good.meta))
+    files = sorted(tmp_path.glob("*.npz"))
+    scored, problems = score_files(scorer, files)
+    assert [s.name for s in scored] == ["good"]
+    assert len(problems) == 4
+    for name in ("other_task", "garbage", "nan_rows", "wrong_shape"):
+        assert any(f"{name}.npz" in p for p in problems), (name, problems)
+    assert any("another task" in p for p in problems)
+
+
+def test_report_groups_by_level_and_ranks_levels(scorer):
+    trajs = [degraded(scorer, s, noise, level) for level, noise in ((3, 0.0), (2, 0.3), (1, 0.8)) for s in (5,)]
+    scored = [scorer.score(t, f"t{i}") for i, t in enumerate(trajs)]
+    references = {"random": {"heuristic": -100.0}, "expert": {"heuristic": 100.0}}
+    normalise(scored, references)
+    assert scored[0].normalised["heuristic"] == pytest.approx((scored[0].scores["heuristic"] + 100) / 200)
+    report = build_report(scored, references, [], learned=False)
+    assert report["grouped_by"] == "skill"
+    assert [g["subject"] for g in report["groups"]][0] == "level 3"
+    assert set(report["ranking"]) == {"heuristic", "subtasks", "path_length", "time", "smoothness"}
+    assert report["ranking"]["time"]["kendall_tau_b"] > 0.5
+
+
+# --- end to end ---------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def airl_run(tmp_path_factory):
+    runs = tmp_path_factory.mktemp("runs")
+    res = CliRunner().invoke(app, ["irl", str(spec_file("tracelines")), "--algorithm", "airl", "--timesteps", "256",
+                                   *sets(), "--runs", str(runs), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    return only_run(runs)
+
+
+def test_fastrl_score_with_a_run_writes_json_csv_figures_and_a_valid_recording(airl_run, tmp_path):
+    spec = load_spec(airl_run / "spec.yaml")
+    scorer = Scorer(spec)
+    for level, noise in ((2, 0.0), (1, 0.7)):
+        for s in (1, 2):
+            degraded(scorer, s, noise, level).save(tmp_path / "in" / f"L{level}_{s}.npz")
+    (tmp_path / "in" / "broken.npz").write_bytes(b"\x00" * 10)
+    out = tmp_path / "out" / "scores.json"
+    res = CliRunner().invoke(app, ["score", "--run", str(airl_run), str(tmp_path / "in"), "-o", str(out),
+                                   "--references", "1", "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert "broken.npz" in res.output and "scored 4 trajectories" in res.output
+    report = json.loads(out.read_text())
+    assert len(report["trajectories"]) == 4 and len(report["problems"]) == 1
+    row = report["trajectories"][0]
+    assert row["reward"] is not None and row["value"] is not None and np.isfinite(row["reward_raw"])
+    assert {"reward", "value", "heuristic"} <= set(report["ranking"])
+    csv_lines = out.with_suffix(".csv").read_text().splitlines()
+    assert len(csv_lines) == 5 and csv_lines[0].startswith("file,subject,skill")
+    for png in ("scores_paths.png", "scores_deviation.png", "scores_distributions.png"):
+        assert (out.parent / png).stat().st_size > 10_000
+    rrd = out.with_suffix(".rrd")
+    rrd_verify(rrd)
+    entities, _ = recorded(rrd)
+    assert any(e.startswith("/world/assessment/") for e in entities)
+    assert any(e.startswith("/assessment/deviation/") for e in entities)
+    assert (airl_run / "assessment" / "references.json").exists()  # cached for the next scoring
+
+
+def test_fastrl_score_needs_a_run_or_a_spec(tmp_path):
+    res = CliRunner().invoke(app, ["score", str(tmp_path)])
+    assert res.exit_code == 2 and "--run RUN_DIR, or --spec SPEC" in res.output
+    res = CliRunner().invoke(app, ["score", "--spec", str(spec_file("tracelines")), str(tmp_path / "none.npz"),
+                                   "-o", str(tmp_path / "s.json"), "--no-progress", "--references", "1"])
+    assert res.exit_code == 2 and "no trajectory could be scored" in res.output
