@@ -94,9 +94,12 @@ def test_inconsistent_samples_are_rejected_with_their_reason():
 def test_imported_trajectory_replays_to_the_same_cue_events(tmp_path):
     env, traj = expert("imagecentring")
     task = env.unwrapped.task
-    csv = write_csv(tmp_path / "session.csv", poses_from_portal(task, traj.time + 12.5, traj.portal))
+    t60 = np.arange(3 * len(traj.time) - 2) / 60.0  # a 60 Hz tracker; the task steps at 20 Hz
+    q60 = np.column_stack([np.interp(t60, traj.time, traj.portal[:, j]) for j in range(5)])
+    csv = write_csv(tmp_path / "session.csv", poses_from_portal(task, t60 + 12.5, q60))
     imported, report = import_poses(task, csv, {"seed": 3, "subject": "s01"}, resample_hz=task.spec.episode.control_hz)
     assert len(imported.time) == len(traj.time) and imported.meta["time_offset"] == pytest.approx(12.5)
+    assert np.all(portal_error(imported.portal, traj.portal) < 1e-9) and "at 20 Hz" in report[-1]
     _, original, _ = replay(env, traj)
     _, again, _ = replay(env, Trajectory.load(imported.save(tmp_path / "session.npz")))
     events = lambda infos: [(i["subtask"], i["cue"]["green"]) for i in infos]  # noqa: E731
