@@ -118,7 +118,7 @@ def test_cli_writes_a_loadable_trajectory_and_names_broken_files(tmp_path):
     t = Trajectory.load(tmp_path / "out.npz")
     assert (t.meta["subject"], t.meta["skill"], t.meta["source"], t.meta["rejected"]) == ("s01", "novice", "human", 1)
     assert t.meta["spec"] == "tracelines" and t.meta["imported_from"] == "s.csv"
-    (tmp_path / "cols.csv").write_text("time,x,y,z,qw,qx,qy\n0,0,0,0,1,0,0\n")
+    (tmp_path / "cols.csv").write_text("\ufefftime,x,y,z,qw,qx,qy\n0,0,0,0,1,0,0\n")  # with a byte-order mark
     (tmp_path / "cell.csv").write_text(",".join(COLUMNS) + "\n0,0,0,0,1,0,0,0,0\n0.1,0,0,zero,1,0,0,0,0\n")
     for name, why in (("cols.csv", "missing columns ['qz', 'cable']"), ("cell.csv", "cell.csv:3: column 'z'"),
                       ("none.csv", "cannot read")):

@@ -116,7 +116,7 @@ def read_pose_csv(path: Path) -> tuple[np.ndarray, list[int]]:
     """Pose table (T, 9) in COLUMNS order and the file line of each row; PoseError names file and line."""
     path = Path(path)
     try:
-        with path.open(newline="", encoding="utf-8") as f:
+        with path.open(newline="", encoding="utf-8-sig") as f:  # -sig: a spreadsheet's byte-order mark
             reader = csv.reader(f)
             header = next(reader, None)
             if header is None:
