@@ -70,6 +70,8 @@ def portal_from_poses(task, poses: np.ndarray, tolerance_mm: float = 2.0, tolera
     Rejected rows are dropped; PoseError if fewer than 2 remain or more than max_rejected of them go.
     """
     poses = np.asarray(poses, float)
+    if poses.ndim != 2 or poses.shape[1] != len(COLUMNS):
+        raise ValueError(f"a pose table has shape (T, {len(COLUMNS)}) in the order {COLUMNS}, got {poses.shape}")
     n = len(poses)
     bad: dict[str, np.ndarray] = {}
     finite = np.all(np.isfinite(poses), axis=1)
