@@ -63,3 +63,19 @@ def test_expert_demos_replay_to_identical_observations(tmp_path):
     np.testing.assert_allclose(replayed, observations, atol=1e-9)
     assert infos[-1]["success"]
     assert json.loads(json.dumps(traj.meta)) == traj.meta
+
+
+def test_plain_numpy_files_follow_the_contract_both_ways(tmp_path):
+    env = fastrl.make(spec_file("tracelines"))
+    from fastrl.data.replay import expert_trajectories
+
+    ours = expert_trajectories(env, [2])[0]
+    meta = {"spec": "tracelines", "subject": "lab-7", "skill": "expert", "source": "human", "seed": 2}
+    np.savez(tmp_path / "theirs.npz", time=ours.time, portal=ours.portal, meta=np.array(json.dumps(meta)))
+    theirs = Trajectory.load(tmp_path / "theirs.npz")  # written without our code, no actions
+    assert theirs.meta == meta and theirs.actions is None
+    _, infos, _ = replay(env, theirs)
+    assert infos[-1]["success"] and infos[-1]["subtask"] == ours.meta["subtasks"]
+    with np.load(ours.save(tmp_path / "ours.npz"), allow_pickle=False) as z:  # and read back without our code
+        assert np.array_equal(z["portal"], ours.portal) and np.array_equal(z["actions"], ours.actions)
+        assert json.loads(str(z["meta"]))["source"] == "expert"

@@ -2,4 +2,56 @@
 
 from __future__ import annotations
 
-from . import app  # noqa: F401  (commands register on the shared app)
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+
+from . import SpecArg, app, err, load_or_exit, out
+
+
+@app.command(name="import-poses")
+def import_poses_(
+    spec: SpecArg,
+    csv_file: Annotated[Path, typer.Argument(metavar="FILE.csv", help="tracked scope poses", show_default=False)],
+    output: Annotated[Path | None, typer.Option("-o", "--output", help="trajectory to write (default: FILE.npz)",
+                                                show_default=False)] = None,
+    subject: Annotated[str | None, typer.Option(help="who held the scope")] = None,
+    skill: Annotated[str | None, typer.Option(help="skill label, if known (e.g. novice, expert)")] = None,
+    source: Annotated[str, typer.Option(help="agent, expert, human or synthetic")] = "human",
+    seed: Annotated[int | None, typer.Option(help="episode seed for replay (avatar jitter of the session)")] = None,
+    tolerance_mm: Annotated[float, typer.Option(help="how far the shaft axis may miss the portal point")] = 2.0,
+    tolerance_deg: Annotated[float, typer.Option(help="how far the orientation may tilt from portal -> tip")] = 5.0,
+    max_rejected: Annotated[float, typer.Option(help="largest fraction of samples that may be rejected")] = 0.2,
+    resample: Annotated[bool, typer.Option(help="resample to the spec's control rate (replay takes one "
+                                           "sample per control step)")] = True,
+) -> None:
+    """Convert tracked scope poses (CSV) into a trajectory through inverse portal kinematics."""
+    from ..data import TrajectoryError
+    from ..data.poses import PoseError, import_poses
+
+    task = load_or_exit(spec)
+    meta = {"source": source}
+    meta.update({k: v for k, v in (("subject", subject), ("skill", skill), ("seed", seed)) if v is not None})
+    hz = task.spec.episode.control_hz if resample else None
+    try:
+        traj, report = import_poses(task, csv_file, meta, tolerance_mm, tolerance_deg, max_rejected, hz)
+    except PoseError as e:
+        err.print(str(e), markup=False)
+        for line in e.details:
+            err.print(line, markup=False)
+        raise typer.Exit(code=2) from None
+    except TrajectoryError as e:
+        err.print(f"{csv_file}: {e}", markup=False)
+        raise typer.Exit(code=2) from None
+    for line in report:
+        out.print(line, markup=False)
+    target = output if output is not None else csv_file.with_suffix(".npz")
+    try:
+        traj.save(target)
+    except OSError as e:
+        err.print(f"cannot write {target}: {e.strerror or e}", markup=False)
+        raise typer.Exit(code=1) from None
+    out.print(f"wrote {escape(str(target))}  ({len(traj.time)} samples, {traj.time[-1]:.2f} s, "
+              f"source {escape(str(traj.meta['source']))})")
