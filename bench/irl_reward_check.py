@@ -6,8 +6,8 @@ For each run (GAIL or AIRL, with networks/ and checkpoints/): the untrained poli
 checkpoint are rolled out deterministically on held-out seeds (20000, 20001, ...). Each rollout is scored by the
 spec's heuristic return (sum of w . phi) and by the learned reward saved in networks/reward.pt, loaded without
 pickle: AIRL r_psi(s), GAIL log D - log(1 - D), discounted with the generator's gamma plus the absorbing tail if
-the episode ended in success. Prints Spearman's rho over rollouts (and, for reference, with the undiscounted sum of learned
-rewards without the tail, and over per-policy mean returns) and writes a scatter figure.
+the episode ended in success. Prints Spearman's rho over rollouts (and, for reference, with the undiscounted
+sum of learned rewards without the tail, and over per-policy mean returns) and writes a scatter figure.
 """
 
 from __future__ import annotations

@@ -14,7 +14,6 @@ from fastrl.assess.report import build_report, score_files
 from fastrl.assess.scoring import Scorer, normalise, value_gain
 from fastrl.cli import app
 from fastrl.data.replay import expert_trajectories, rollout_trajectory
-from fastrl.data.trajectory import Trajectory
 from fastrl.spec import load_spec
 
 from .conftest import spec_file

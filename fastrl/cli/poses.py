@@ -18,7 +18,8 @@ def import_poses_(
     output: Annotated[Path | None, typer.Option("-o", "--output", help="trajectory to write (default: FILE.npz)",
                                                 show_default=False)] = None,
     subject: Annotated[str | None, typer.Option(help="who held the scope")] = None,
-    skill: Annotated[str | None, typer.Option(help="skill label, if known (e.g. novice, expert)")] = None,
+    skill: Annotated[str | None, typer.Option(
+        help="skill label, if known: a number (higher = more skilled) is ranked by `fastrl score`")] = None,
     source: Annotated[str, typer.Option(help="agent, expert, human or synthetic")] = "human",
     seed: Annotated[int | None, typer.Option(help="episode seed for replay (avatar jitter of the session)")] = None,
     tolerance_mm: Annotated[float, typer.Option(help="how far the shaft axis may miss the portal point")] = 2.0,
@@ -33,7 +34,8 @@ def import_poses_(
 
     task = load_or_exit(spec)
     meta = {"source": source}
-    meta.update({k: v for k, v in (("subject", subject), ("skill", skill), ("seed", seed)) if v is not None})
+    meta.update({k: v for k, v in (("subject", subject), ("skill", _number_or_text(skill)), ("seed", seed))
+                 if v is not None})
     hz = task.spec.episode.control_hz if resample else None
     try:
         traj, report = import_poses(task, csv_file, meta, tolerance_mm, tolerance_deg, max_rejected, hz)
@@ -55,3 +57,14 @@ def import_poses_(
         raise typer.Exit(code=1) from None
     out.print(f"wrote {escape(str(target))}  ({len(traj.time)} samples, {traj.time[-1]:.2f} s, "
               f"source {escape(str(traj.meta['source']))})")
+
+
+def _number_or_text(label: str | None):
+    """A skill label as a number where it is one (so it can be ranked), else the text."""
+    if label is None:
+        return None
+    try:
+        value = float(label)
+    except ValueError:
+        return label
+    return int(value) if value.is_integer() else value

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model.portal import mat_to_quat, portal_from_shaft, quat_to_mat, shaft_pose, wrap
-from ..spec import spec_hash
+from ..spec import spec_hash, task_hash
 from .trajectory import Trajectory
 
 COLUMNS = ("time", "x", "y", "z", "qw", "qx", "qy", "qz", "cable")  # s, m (x3), quaternion wxyz, rad
@@ -168,8 +168,9 @@ def import_poses(task, path: Path, meta: dict, tolerance_mm: float = 2.0, tolera
         raw = len(time)
         time, portal = resample(time, portal, resample_hz)
         text.append(f"resampled {raw} samples to {len(time)} at {resample_hz:g} Hz (one per control step)")
-    meta = {"spec": task.spec.name, "spec_hash": spec_hash(task.spec), "source": "human",
-            "imported_from": path.name, "samples": report.rows, "rejected": report.rows - report.kept,
+    meta = {"spec": task.spec.name, "spec_hash": spec_hash(task.spec), "task_hash": task_hash(task.spec),
+            "source": "human", "imported_from": path.name, "samples": report.rows,
+            "rejected": report.rows - report.kept,
             "rejected_by_reason": {k: len(v) for k, v in report.rejected.items()},
             "time_offset": float(time[0]), **meta}
     return Trajectory(time - time[0], portal, meta), text

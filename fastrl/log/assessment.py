@@ -35,8 +35,8 @@ def markdown_table(report: dict) -> str:
         cells = [("-" if g[k] is None else f"{g[k]:.3g} ± {g[k + '_sd']:.2g}") for k in keys]
         lines.append(f"| {g['subject']} | {g['n']} | " + " | ".join(cells) + " |")
     if report["ranking"]:
-        lines += ["", "## Ranking against skill labels", "", "| score | Spearman rho [95% CI] | Kendall tau-b [95% CI] |"
-                  " levels in order |", "|---|---|---|---|"]
+        lines += ["", "## Ranking against skill labels", "",
+                  "| score | Spearman rho [95% CI] | Kendall tau-b [95% CI] | levels in order |", "|---|---|---|---|"]
         for k, r in report["ranking"].items():
             def fmt(v, ci):
                 return "-" if v is None else f"{v:.2f}" + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "")

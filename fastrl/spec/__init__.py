@@ -31,4 +31,5 @@ def json_schema() -> dict:
 
 
 __all__ = ["Avatar", "Cue", "DomeScene", "Line", "Portal", "Scope", "SpecError", "SpecIssue", "Task",
-           "TaskSpec", "apply_overrides", "json_schema", "load_model", "load_spec", "read_yaml", "spec_hash", "task_hash"]
+           "TaskSpec", "apply_overrides", "json_schema", "load_model", "load_spec", "read_yaml", "spec_hash",
+           "task_hash"]
