@@ -16,12 +16,12 @@ IDS = {"imagecentring": "fastrl/ImageCentring-v0", "periscoping": "fastrl/Perisc
        "tracelines": "fastrl/TraceLines-v0"}
 
 
-@pytest.mark.parametrize("mode", ["discrete", "continuous"])
+@pytest.mark.parametrize("mode", ["discrete", "continuous", "rates"])
 def test_gymnasium_and_sb3_checkers_pass(task_name, mode):
     env = gymnasium.make(IDS[task_name], actions={"mode": mode})
     gym_check_env(env.unwrapped, skip_render_check=True)
     sb3_check_env(env.unwrapped, warn=False)
-    assert env.action_space.shape == (() if mode == "discrete" else (7,))
+    assert env.action_space.shape == {"discrete": (), "continuous": (7,), "rates": (5,)}[mode]
     if mode == "discrete":
         assert env.action_space.n == 11
 
@@ -45,7 +45,7 @@ def test_same_seed_and_actions_give_identical_observations(task_name):
     assert not np.array_equal(a, c)
 
 
-@pytest.mark.parametrize("mode", ["discrete", "continuous"])
+@pytest.mark.parametrize("mode", ["discrete", "continuous", "rates"])
 def test_the_shaft_always_passes_through_the_portal_point(mode):
     env = fastrl.make(spec_file("imagecentring"), actions={"mode": mode})
     u = env.unwrapped
@@ -55,7 +55,7 @@ def test_the_shaft_always_passes_through_the_portal_point(mode):
     env.reset(seed=0)
     worst, contacts = 0.0, 0
     for _ in range(600):
-        a = rng.integers(0, 11) if mode == "discrete" else rng.uniform(-1, 1, 7)
+        a = rng.integers(0, 11) if mode == "discrete" else rng.uniform(-1, 1, env.action_space.shape)
         _, _, term, trunc, info = env.step(a)
         tip, axis = u.data.xpos[shaft], u.data.xmat[shaft].reshape(3, 3)[:, 2]
         worst = max(worst, np.linalg.norm(np.cross(point - tip, axis)))
@@ -151,6 +151,27 @@ def test_bad_actions_raise_and_out_of_range_continuous_actions_are_clipped():
         envs[0].step(np.array([np.inf, 0, 0, 0, 0, 0, 0]))
     a, b = envs[0].step(np.full(7, 5.0))[0], envs[1].step(np.ones(7))[0]
     assert np.array_equal(a, b)
+
+
+def test_rate_actions_move_each_coordinate_at_its_maximum_rate():
+    env = fastrl.make(spec_file("tracelines"), actions={"mode": "rates"}, scope={"start": {"noise": [0, 0, 0, 0, 0]}})
+    u = env.unwrapped
+    c = u.task_spec.actions
+    rates = np.radians([c.max_pivot_rate_deg, c.max_pivot_rate_deg, 0, c.max_roll_rate_deg, 0])
+    rates[2], rates[4] = c.max_insertion_rate, c.max_cable_rate
+    for k in range(5):
+        env.reset(seed=0)
+        q0 = u.portal_coordinates()
+        a = np.zeros(5, np.float32)
+        a[k] = -0.5 if k == 2 else 0.5  # retract rather than push into the plate
+        for _ in range(10):
+            env.step(a)
+        moved = u.portal_coordinates() - q0
+        expected = a[k] * rates[k] * 10 * u.dt
+        assert moved[k] == pytest.approx(expected, rel=0.15), (k, moved)
+        assert np.all(np.abs(np.delete(moved, k)) < 0.1 * abs(expected) + 1e-4), (k, moved)
+    with pytest.raises(ValueError, match="5 values"):
+        env.step(np.zeros(7))
 
 
 def test_truncates_at_the_time_limit():

@@ -8,7 +8,7 @@ from fastrl.agents.expert import run_expert_episode
 from .conftest import spec_file
 
 
-@pytest.mark.parametrize("mode", ["discrete", "continuous"])
+@pytest.mark.parametrize("mode", ["discrete", "continuous", "rates"])
 def test_scripted_expert_completes_all_subtasks(task_name, mode):
     env = fastrl.make(spec_file(task_name), actions={"mode": mode})
     for seed in (0, 1):

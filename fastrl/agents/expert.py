@@ -21,7 +21,8 @@ class ScriptedExpert:
         self.kin = Kinematics(self.env.task)
         periscoping = self.env.task_spec.task.kind == "periscoping"
         self.pivot_weight = pivot_weight if pivot_weight is not None else (0.3 if periscoping else 0.02)
-        self.discrete = self.env.task_spec.actions.mode == "discrete"
+        self.mode = self.env.task_spec.actions.mode
+        self.discrete = self.mode == "discrete"
         if self.discrete:
             self.steps = np.abs(self.env.actions.table[1::2].sum(axis=1))
         nv = self.env.model.nv
@@ -44,7 +45,9 @@ class ScriptedExpert:
             self.goal, _ = solve_view(self.kin, k, q, target, self.pivot_weight)
             self.goal_for, self.waiting = k, 0
         err = self.goal - q
-        return self._discrete(err) if self.discrete else self._continuous(err)
+        if self.discrete:
+            return self._discrete(err)
+        return self._rates(err) if self.mode == "rates" else self._continuous(err)
 
     def _discrete(self, err: np.ndarray) -> int:
         """One increment on the coordinate furthest from the goal; retract first, insert last."""
@@ -59,6 +62,13 @@ class ScriptedExpert:
             return 5
         self.waiting += 1
         return 0
+
+    def _rates(self, err: np.ndarray) -> np.ndarray:
+        """Portal rates proportional to the remaining error, saturating at the maximum rates."""
+        step = self.env.actions.step
+        if np.abs(err).max() < 1e-3:
+            self.waiting += 1
+        return np.clip(0.5 * err / step, -1.0, 1.0).astype(np.float32)
 
     def _continuous(self, err: np.ndarray) -> np.ndarray:
         """Accelerations that bring the commanded tip twist to a proportional approach of the goal."""

@@ -1,4 +1,4 @@
-"""Action spaces: 11 discrete portal increments, or 7 continuous tip accelerations and cable rate."""
+"""Action spaces: 11 discrete portal increments, 7 continuous tip accelerations and cable rate, or 5 portal rates."""
 
 from __future__ import annotations
 
@@ -90,6 +90,32 @@ class ContinuousActions:
         t[4] += a[6] * c.max_cable_rate * dt
         q = np.array(q)
         t = np.clip(t, q - self.LEAD, q + self.LEAD)
+        return np.clip(t, self.lo, self.hi).tolist()
+
+
+class RateActions:
+    """Box(5): portal coordinate rates (pitch, yaw, insertion, roll, cable) in [-1, 1] of their maximum rates."""
+
+    def __init__(self, cfg: Actions, ranges: np.ndarray, dt: float):
+        self.space = spaces.Box(-1.0, 1.0, (5,), np.float32)
+        self.step = dt * np.array([math.radians(cfg.max_pivot_rate_deg), math.radians(cfg.max_pivot_rate_deg),
+                                   cfg.max_insertion_rate, math.radians(cfg.max_roll_rate_deg), cfg.max_cable_rate])
+        self.lead = 3.0 * self.step
+        self.lo, self.hi = ranges[:, 0], ranges[:, 1]
+
+    def reset(self, data: mujoco.MjData, qadr: np.ndarray) -> None:
+        """Nothing to reset: the servos hold the pose."""
+
+    def targets(self, action, target: list, q: list, model, data) -> list:
+        """Servo targets moved by rate x dt, kept within the limits and a few steps of the pose."""
+        a = np.asarray(action, dtype=float).reshape(-1)
+        if a.shape != (5,):
+            raise ValueError(f"rates action must have 5 values, got shape {np.shape(action)}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"action has non-finite values: {a.tolist()}")
+        t = np.array(target) + np.clip(a, -1.0, 1.0) * self.step
+        q = np.array(q)
+        t = np.clip(t, q - self.lead, q + self.lead)
         return np.clip(t, self.lo, self.hi).tolist()
 
 

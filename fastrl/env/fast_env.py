@@ -14,7 +14,7 @@ from ..model.compiler import CompiledTask, compile_task
 from ..spec import geometry as geo
 from ..spec.models import TaskSpec
 from ..terms import OBSERVATION_TERMS, REWARD_FEATURES, TaskState
-from .actions import ContinuousActions, DiscreteActions
+from .actions import ContinuousActions, DiscreteActions, RateActions
 from .cues import cue_checks, update_dwell
 from .sensing import Sensor
 
@@ -37,6 +37,8 @@ class FastEnv(gym.Env):
         ranges = self.task.ranges
         if spec.actions.mode == "discrete":
             self.actions = DiscreteActions(spec.actions, ranges)
+        elif spec.actions.mode == "rates":
+            self.actions = RateActions(spec.actions, ranges, self.dt)
         else:
             self.actions = ContinuousActions(spec.actions, ranges, self.dt, self.model.body("scope_optics").id)
         self.action_space = self.actions.space

@@ -87,8 +87,9 @@ def action_problem(traj: Trajectory, mode: str) -> str | None:
     a = np.asarray(traj.actions)
     if mode == "discrete" and a.ndim != 1:
         return f"has continuous actions {a.shape}, the spec's actions are discrete"
-    if mode == "continuous" and (a.ndim != 2 or a.shape[1] != 7):
-        return f"has discrete actions {a.shape}, the spec's actions are continuous (7 per step)"
+    width = {"continuous": 7, "rates": 5}.get(mode)
+    if width is not None and (a.ndim != 2 or a.shape[1] != width):
+        return f"has actions of shape {a.shape}, the spec's actions are {mode} ({width} per step)"
     return None
 
 

@@ -176,15 +176,20 @@ class Episode(Strict):
 class Actions(Strict):
     """Action space and its scales."""
 
-    mode: Literal["discrete", "continuous"] = "discrete"
+    mode: Literal["discrete", "continuous", "rates"] = Field(
+        "discrete", description="discrete: 11 portal increments; continuous: 7 tip accelerations and the cable "
+                                "rate (the FASTRL API); rates: 5 portal coordinate rates (first order)")
     pivot_step_deg: Pos = 1.5
     insertion_step: Pos = 0.002
     roll_step_deg: Pos = 4.0
     cable_step_deg: Pos = 4.0
     max_accel: Pos = Field(1.0, description="continuous: tip linear acceleration at |a| = 1 (m/s^2)")
     max_ang_accel: Pos = Field(30.0, description="continuous: tip angular acceleration at |a| = 1 (rad/s^2)")
-    max_cable_rate: Pos = Field(2.0, description="continuous: light-cable rate at |a| = 1 (rad/s)")
+    max_cable_rate: Pos = Field(2.0, description="continuous and rates: light-cable rate at |a| = 1 (rad/s)")
     max_speed: Pos = Field(0.1, description="continuous: cap on the commanded tip speed (m/s)")
+    max_pivot_rate_deg: Pos = Field(30.0, description="rates: pitch and yaw rate at |a| = 1 (deg/s)")
+    max_insertion_rate: Pos = Field(0.04, description="rates: insertion rate at |a| = 1 (m/s)")
+    max_roll_rate_deg: Pos = Field(80.0, description="rates: roll rate at |a| = 1 (deg/s)")
     max_ang_speed: Pos = Field(2.0, description="continuous: cap on the commanded angular speed (rad/s)")
 
 
@@ -259,8 +264,8 @@ class TaskSpec(Strict):
 
     @model_validator(mode="after")
     def _reachable(self):
-        if self.train.algo == "SAC" and self.actions.mode != "continuous":
-            _fail("train.algo", "SAC needs continuous actions: set actions.mode: continuous")
+        if self.train.algo == "SAC" and self.actions.mode == "discrete":
+            _fail("train.algo", "SAC needs continuous actions: set actions.mode: continuous (or rates)")
         if self.irl.algorithm == "bc" and self.train.algo != "PPO":
             _fail("irl.algorithm", "behavioural cloning trains the PPO policy: set train.algo: PPO")
         names = [p.name for p in self.scene.portals]
