@@ -235,3 +235,16 @@ def test_rays_see_the_avatar_at_the_solved_view_and_not_when_looking_away():
     assert info["features"]["rays"] == 1.0
     _, _, _, _, info = u.replay_step(q + np.array([0, 0, 0, 0, np.pi]))  # light cable half a turn away
     assert info["features"]["rays"] == 0.0
+
+
+@pytest.mark.parametrize(("algo", "setting", "expected"), [
+    ("PPO", None, True), ("SAC", None, False), ("SAC", True, True), ("PPO", False, False)])
+def test_reward_normalisation_defaults_on_for_ppo_and_off_for_sac(algo, setting, expected):
+    from fastrl.agents.sb3 import make_vec_env
+    from fastrl.spec import load_spec
+
+    sets = [f"train.algo={algo}", "actions.mode=rates"]
+    if setting is not None:
+        sets.append(f"train.normalize.reward={str(setting).lower()}")
+    venv = make_vec_env(load_spec(spec_file("tracelines"), sets), 1, 0)
+    assert venv.norm_reward is expected

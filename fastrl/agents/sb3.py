@@ -43,7 +43,8 @@ def make_vec_env(spec: TaskSpec, n_envs: int, seed: int) -> VecEnv:
     venv = FreshInfoVecEnv([lambda: FastEnv(spec) for _ in range(n_envs)])
     venv.seed(seed)
     norm = spec.train.normalize
-    norm_reward = norm.reward and not spec.irl.enabled
+    by_default = spec.train.algo == "PPO"  # SAC: a moving reward scale fights its entropy temperature
+    norm_reward = (by_default if norm.reward is None else norm.reward) and not spec.irl.enabled
     if norm.obs or norm_reward:
         venv = VecNormalize(venv, norm_obs=norm.obs, norm_reward=norm_reward, gamma=spec.train.params().gamma)
     return venv

@@ -54,7 +54,8 @@ class Normalize(BaseModel):
 
     model_config = ConfigDict(frozen=True, extra="forbid")
     obs: bool = True
-    reward: bool = True
+    reward: bool | None = Field(None, description="normalise rewards by the running return scale; default (null): "
+                                "on for PPO, off for SAC, whose entropy temperature is tuned to the reward's scale")
 
 
 class Train(BaseModel):
