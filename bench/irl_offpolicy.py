@@ -6,7 +6,7 @@
 Variants: `full` (spectral normalisation + discriminator trained on the current rollout only),
 `no-current-rollout` (spectral norm, discriminator trained on samples of the whole replay buffer),
 `no-spectral-norm` (current rollout, plain discriminator). Every run is a real run directory under --root with
-a deterministic evaluation on 10 seeds every 25k steps, the same budget for all (no early stop). The report
+a deterministic evaluation on 10 seeds every --eval-every steps, the same budget for all (no early stop). The report
 prints a table (mean and spread over seeds of the final evaluation, steps to 90% of the expert) and writes a
 figure of subtasks completed over steps.
 """
@@ -32,10 +32,10 @@ VARIANTS = {
     "no-spectral-norm": ["irl.discriminator.spectral_norm=false", "irl.discriminator.current_rollout=true"],
 }
 # the fast SAC schedule measured by bench/sac_speed.py: 8 envs, 32 steps each between updates, 1 update per 8 steps
-SCHEDULE = ["actions.mode=continuous", "train.algo=SAC", "train.n_envs=8", "train.sac.train_freq=32",
+SCHEDULE = ["train.algo=SAC", "train.n_envs=8", "train.sac.train_freq=32",
             "train.sac.gradient_steps=32", "train.sac.net_arch=[128, 128]", "train.sac.learning_starts=5000",
             "irl.algorithm=airl", "irl.discriminator.steps=16", "irl.discriminator.learning_rate=1e-3",
-            "evaluate.periodic_every=25000", "evaluate.periodic_episodes=10", "train.checkpoint_every=50000",
+            "evaluate.periodic_episodes=10", "train.checkpoint_every=50000",
             "train.keep_checkpoints=100", "evaluate.record_episodes=5"]
 
 
@@ -46,7 +46,8 @@ def run(args) -> None:
     for seed in args.seeds:
         for variant in args.variants:
             root = Path(args.root) / variant
-            sets = [*SCHEDULE, *VARIANTS[variant], f"train.seed={seed}", f"train.timesteps={args.steps}"]
+            sets = [*SCHEDULE, *VARIANTS[variant], f"actions.mode={args.mode}", f"train.seed={seed}",
+                    f"train.timesteps={args.steps}", f"evaluate.periodic_every={args.eval_every}"]
             t0 = time.perf_counter()
             path = start_run("specs/tracelines.yaml", sets, root, progress=not args.quiet)
             print(f"{variant} seed {seed}: {path} in {time.perf_counter() - t0:.0f} s", flush=True)
@@ -107,15 +108,18 @@ def report(args) -> None:
 def main() -> None:
     """Parse arguments and run or report."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("mode", choices=["run", "report"])
+    ap.add_argument("command", choices=["run", "report"])
     ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     ap.add_argument("--steps", type=int, default=100_000)
+    ap.add_argument("--mode", default="rates", choices=["rates", "continuous"],
+                    help="action mode: rates (5 portal rates, first order) or continuous (7 tip accelerations)")
+    ap.add_argument("--eval-every", type=int, default=25_000, help="steps between evaluations during training")
     ap.add_argument("--root", default="runs/bench-offpolicy")
     ap.add_argument("--figure", default="docs/irl_fig5.png")
     ap.add_argument("--quiet", action="store_true")
     args = ap.parse_args()
-    run(args) if args.mode == "run" else report(args)
+    run(args) if args.command == "run" else report(args)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,141 @@
+"""Do the scores rank a synthetic cohort by skill? Table 1 per task, and the time to score 100 trajectories.
+
+    python bench/assess_cohort.py                  # 3 tasks x 5 levels x 10 trainees, GAIL and AIRL runs
+    python bench/assess_cohort.py --tasks tracelines --timing-only
+
+For each task: a cohort (`fastrl cohort SPEC --levels 5 --per-level 10`, written once under
+runs/bench-assess/<task>/cohort) is scored with each inverse-RL run of bench/irl_tasks.py
+(runs/bench-irl/<task>/*-{gail,airl}-ppo-s0: its learned reward r_psi and value V_phi) by the same code as
+`fastrl score --run RUN cohort/`. Prints, per task, the Table 1-style mean ± sd per level of the normalised
+scores (0 = random policy, 1 = scripted expert) and Kendall tau-b (with 95% bootstrap CI) of each score against
+the true level. Timing: a TraceLines cohort of 5 x 20 = 100 trajectories scored (replay included) with the AIRL
+run, best of 3, references cached, no pictures. Writes docs/assess_cohort.json.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import argparse
+import json
+import platform
+import time
+from pathlib import Path
+
+TASKS = ("imagecentring", "periscoping", "tracelines")
+ROOT = Path("runs/bench-assess")
+
+
+def cohort_dir(task: str, levels: int, per_level: int) -> Path:
+    """The cohort's folder, generated on first use."""
+    from fastrl.data.cohort import make_cohort
+    from fastrl.spec import load_spec
+
+    out = ROOT / task / f"cohort-{levels}x{per_level}"
+    if len(list(out.glob("*.npz"))) == levels * per_level:
+        return out
+    out.mkdir(parents=True, exist_ok=True)
+    for traj in make_cohort(load_spec(f"specs/{task}.yaml"), levels, per_level, seed=0):
+        traj.save(out / f"{traj.meta['subject']}.npz")
+    return out
+
+
+def irl_run(task: str, algorithm: str) -> Path | None:
+    """The newest inverse-RL run of bench/irl_tasks.py for a task and algorithm."""
+    found = sorted(Path("runs/bench-irl", task).glob(f"*-{algorithm}-ppo-s0"))
+    return found[-1] if found else None
+
+
+def score_task(task: str, levels: int, per_level: int) -> dict:
+    """Both algorithms' reports on the task's cohort."""
+    from fastrl.runner.assessment import assess
+
+    cohort = cohort_dir(task, levels, per_level)
+    out = {}
+    for algorithm in ("airl", "gail"):
+        run = irl_run(task, algorithm)
+        if run is None:
+            print(f"{task}: no {algorithm} run under runs/bench-irl/{task}: skipped")
+            continue
+        result = assess([cohort], run=run, output=ROOT / task / algorithm / "scores.json", progress=False)
+        out[algorithm] = {"run": str(run), "report": result.report, "seconds": result.seconds}
+    return out
+
+
+def table(task: str, reports: dict) -> None:
+    """Table 1-style markdown: mean ± sd per level, then tau-b per score."""
+    airl, gail = reports.get("airl", {}).get("report"), reports.get("gail", {}).get("report")
+    base = airl or gail
+    cols = [("heuristic", base, "heuristic"), ("r_psi (AIRL)", airl, "reward"), ("V_phi (AIRL)", airl, "value"),
+            ("r (GAIL)", gail, "reward"), ("V (GAIL)", gail, "value"), ("path length (m)", base, "path_length"),
+            ("time (s)", base, "time")]
+    cols = [c for c in cols if c[1] is not None]
+    print(f"\n### {task}\n")
+    print("| level | " + " | ".join(c[0] for c in cols) + " |")
+    print("|---|" + "---|" * len(cols))
+    for g in base["groups"]:
+        cells = []
+        for _, rep, key in cols:
+            grp = next(x for x in rep["groups"] if x["subject"] == g["subject"])
+            cells.append("-" if grp[key] is None else f"{grp[key]:.3g} ± {grp[key + '_sd']:.2g}")
+        print(f"| {g['subject']} | " + " | ".join(cells) + " |")
+    cells = []
+    for _, rep, key in cols:
+        r = rep["ranking"].get(key)
+        cells.append("-" if not r or r["kendall_tau_b"] is None else
+                     f"{r['kendall_tau_b']:.2f} [{r['kendall_ci'][0]:.2f}, {r['kendall_ci'][1]:.2f}]")
+    print("| Kendall tau-b vs level | " + " | ".join(cells) + " |")
+    print("| level means in order | " + " | ".join(
+        "yes" if rep["ranking"].get(key, {}).get("levels_in_order") else "no" for _, rep, key in cols) + " |")
+
+
+def timing(levels: int = 5, per_level: int = 20, rounds: int = 3) -> dict:
+    """Seconds to score 100 TraceLines trajectories with the AIRL run (replay and networks included)."""
+    from fastrl.assess.report import score_files, trajectory_files
+    from fastrl.runner.assessment import load_scorer
+
+    cohort = cohort_dir("tracelines", levels, per_level)
+    scorer, _ = load_scorer(irl_run("tracelines", "airl"), None)
+    files = trajectory_files([cohort])
+    best, steps = float("inf"), 0
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        scored, problems = score_files(scorer, files)
+        best = min(best, time.perf_counter() - t0)
+        steps = sum(len(s.time) for s in scored)
+    return {"trajectories": len(files), "samples": steps, "seconds": best, "samples_per_s": steps / best}
+
+
+def main() -> None:
+    """Score every task's cohort, print the tables and the timing, write JSON."""
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
+    ap.add_argument("--levels", type=int, default=5)
+    ap.add_argument("--per-level", type=int, default=10)
+    ap.add_argument("--timing-only", action="store_true")
+    ap.add_argument("--out", type=Path, default=Path("docs/assess_cohort.json"))
+    args = ap.parse_args()
+    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"load {os.getloadavg()[0]:.1f}")
+    results = {}
+    if not args.timing_only:
+        for task in args.tasks:
+            results[task] = score_task(task, args.levels, args.per_level)
+            table(task, results[task])
+    t = timing()
+    print(f"\nscoring {t['trajectories']} TraceLines trajectories ({t['samples']} samples, replay and networks "
+          f"included): {t['seconds']:.2f} s ({t['samples_per_s']:,.0f} samples/s)")
+    summary = {task: {alg: {"run": r["run"], "ranking": r["report"]["ranking"], "groups": r["report"]["groups"]}
+                      for alg, r in res.items()} for task, res in results.items()}
+    saved = json.loads(args.out.read_text()) if args.out.exists() else {"tasks": {}}
+    saved["tasks"].update(summary)
+    saved["timing"] = t
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(saved, indent=2))
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
