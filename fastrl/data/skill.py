@@ -1,0 +1,56 @@
+"""A trainee's skill as parameters of deviation from the scripted expert, graded by level."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+
+
+@dataclass(frozen=True)
+class SkillProfile:
+    """How a trainee deviates from the scripted expert; every parameter 0 is the expert."""
+
+    motor_noise: float = 0.0  # probability that a step's action is replaced by a random movement
+    tremor: float = 0.0       # amplitude (in action increments) of an oscillating error on pitch, yaw, roll
+    delay: float = 0.0        # reaction delay (s): pose and current subtask are seen this late
+    overshoot: float = 0.0    # mean extra increments past a coordinate's goal before correcting
+    hesitation: float = 0.0   # probability per step of starting an idle pause (about 0.5 s)
+    wander: float = 0.0       # probability of a random search sweep instead of a direct move, target out of view
+    optics: float = 0.0       # 0..1 poor use of the angled optics: cable turns cost, shaft pivots are free
+
+    def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not value >= 0.0:  # also rejects NaN
+                raise ValueError(f"skill parameter {f.name} must be >= 0, got {value!r}")
+        for name in ("motor_noise", "hesitation", "wander", "optics"):
+            if getattr(self, name) > 1.0:
+                raise ValueError(f"skill parameter {name} is a probability or share in [0, 1], got {getattr(self, name)}")
+
+    def scaled(self, g: float) -> SkillProfile:
+        """Every parameter times g (g = 0: the expert)."""
+        return SkillProfile(**{k: v * g for k, v in asdict(self).items()})
+
+    def as_dict(self) -> dict[str, float]:
+        """The parameters by name (for trajectory metadata)."""
+        return {k: float(v) for k, v in asdict(self).items()}
+
+
+PARAMETERS = tuple(f.name for f in fields(SkillProfile))
+
+# The least skilled level of a cohort; better levels scale every parameter down toward 0.
+NOVICE = SkillProfile(motor_noise=0.25, tremor=1.2, delay=0.3, overshoot=3.0, hesitation=0.06, wander=0.6,
+                      optics=0.8)
+
+
+def skill_gap(level: int, levels: int) -> float:
+    """How far level is from the expert: 1 at level 1 (novice), 0 at level `levels`."""
+    if levels < 2:
+        raise ValueError(f"a cohort needs at least 2 levels, got {levels}")
+    if not 1 <= level <= levels:
+        raise ValueError(f"level must be in 1..{levels}, got {level}")
+    return (levels - level) / (levels - 1)
+
+
+def profile_for_level(level: int, levels: int, novice: SkillProfile = NOVICE) -> SkillProfile:
+    """The skill profile of a level: level 1 is the novice, level `levels` the expert (all parameters 0)."""
+    return novice.scaled(skill_gap(level, levels))
