@@ -10,12 +10,12 @@ class SkillProfile:
     """How a trainee deviates from the scripted expert; every parameter 0 is the expert."""
 
     motor_noise: float = 0.0  # probability that a step's action is replaced by a random movement
-    tremor: float = 0.0       # amplitude (in action increments) of an oscillating error on pitch, yaw, roll
+    tremor: float = 0.0       # amplitude (pitch and yaw increments) of a 2 Hz oscillation added to the moves
     delay: float = 0.0        # reaction delay (s): pose and current subtask are seen this late
     overshoot: float = 0.0    # mean extra increments past a coordinate's goal before correcting
     hesitation: float = 0.0   # probability per step of starting an idle pause (about 0.5 s)
     wander: float = 0.0       # probability of a random search sweep instead of a direct move, target out of view
-    optics: float = 0.0       # 0..1 poor use of the angled optics: cable turns cost, shaft pivots are free
+    optics: float = 0.0       # probability per subtask of solving the view by moving the shaft, not the cable
 
     def __post_init__(self):
         for f in fields(self):
@@ -38,7 +38,7 @@ class SkillProfile:
 PARAMETERS = tuple(f.name for f in fields(SkillProfile))
 
 # The least skilled level of a cohort; better levels scale every parameter down toward 0.
-NOVICE = SkillProfile(motor_noise=0.25, tremor=1.2, delay=0.3, overshoot=3.0, hesitation=0.06, wander=0.6,
+NOVICE = SkillProfile(motor_noise=0.25, tremor=0.6, delay=0.3, overshoot=3.0, hesitation=0.06, wander=0.6,
                       optics=0.8)
 
 
