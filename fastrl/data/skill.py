@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
 
+PROBABILITIES = ("motor_noise", "hesitation", "wander", "optics")
+
 
 @dataclass(frozen=True)
 class SkillProfile:
@@ -22,9 +24,9 @@ class SkillProfile:
             value = getattr(self, f.name)
             if not value >= 0.0:  # also rejects NaN
                 raise ValueError(f"skill parameter {f.name} must be >= 0, got {value!r}")
-        for name in ("motor_noise", "hesitation", "wander", "optics"):
+        for name in PROBABILITIES:
             if getattr(self, name) > 1.0:
-                raise ValueError(f"skill parameter {name} is a probability or share in [0, 1], got {getattr(self, name)}")
+                raise ValueError(f"skill parameter {name} is a probability, got {getattr(self, name)}")
 
     def scaled(self, g: float) -> SkillProfile:
         """Every parameter times g (g = 0: the expert)."""
@@ -37,9 +39,10 @@ class SkillProfile:
 
 PARAMETERS = tuple(f.name for f in fields(SkillProfile))
 
-# The least skilled level of a cohort; better levels scale every parameter down toward 0.
-NOVICE = SkillProfile(motor_noise=0.25, tremor=0.6, delay=0.3, overshoot=3.0, hesitation=0.06, wander=0.6,
-                      optics=0.8)
+# Level 1 of a cohort; level l of L scales every parameter by (L - l) / (L - 1), down to 0 (the expert).
+# Tuned so that the heuristic return separates 5 levels on the bundled tasks (bench/cohort_levels.py).
+NOVICE = SkillProfile(motor_noise=0.18, tremor=0.4, delay=0.2, overshoot=2.0, hesitation=0.04, wander=0.15,
+                      optics=0.6)
 
 
 def skill_gap(level: int, levels: int) -> float:
