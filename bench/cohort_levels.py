@@ -38,10 +38,13 @@ def measure(task: str, levels: int, per_level: int, seed: int) -> dict:
     generated = time.perf_counter() - t0
     rows = [{"skill": t.meta["skill"], **replayed_figures(env, t)} for t in cohort]
     tau = kendalltau([r["skill"] for r in rows], [r["return"] for r in rows]).statistic
+    pairs = [(a["return"], b["return"]) for a in rows for b in rows if a["skill"] < b["skill"]]
+    discordant = sum(lo >= hi for lo, hi in pairs)
     table = level_table(rows)
     means = [e["return"] for e in table]
     ordered = all(a < b for a, b in zip(means, means[1:]))
     return {"task": task, "table": table, "tau_b": float(tau), "strict_order": ordered,
+            "pairs": len(pairs), "discordant": discordant,
             "generate_s": generated, "total_s": time.perf_counter() - t0}
 
 
@@ -59,6 +62,7 @@ def main() -> None:
         r = measure(task, a.levels, a.per_level, a.seed)
         results.append(r)
         print(f"\n{task}: tau-b {r['tau_b']:.3f}, level means in strict order: {r['strict_order']}, "
+              f"{r['discordant']} of {r['pairs']} cross-level pairs out of order, "
               f"generated in {r['generate_s']:.1f} s (with replay {r['total_s']:.1f} s)")
         print("| level | return | subtasks | duration (s) |")
         print("|---|---|---|---|")
