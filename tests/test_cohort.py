@@ -9,7 +9,7 @@ from typer.testing import CliRunner
 import fastrl
 from fastrl.cli import app
 from fastrl.data import Trajectory, load_trajectories
-from fastrl.data.cohort import make_cohort
+from fastrl.data.cohort import level_table, make_cohort, replayed_figures
 from fastrl.data.replay import rollout_trajectory
 from fastrl.data.skill import NOVICE, PARAMETERS, SkillProfile, profile_for_level
 from fastrl.data.trainee import Trainee
@@ -102,6 +102,14 @@ def test_meta_carries_level_subject_and_profile(short_env):
     for t in cohort:
         assert t.meta["source"] == "synthetic" and t.meta["levels"] == 3
         assert t.meta["profile"] == profile_for_level(t.meta["skill"], 3).as_dict()
+
+
+def test_replayed_return_rises_with_level(short_env):
+    spec = short_env.unwrapped.task_spec
+    rows = [{"skill": t.meta["skill"], **replayed_figures(short_env, t)}
+            for t in make_cohort(spec, 3, 3, seed=0, env=short_env)]
+    means = [e["return"] for e in level_table(rows)]
+    assert means[0] < means[1] < means[2], means
 
 
 def test_profiles_grow_from_expert_to_novice():
