@@ -16,11 +16,12 @@ RESOLVE_EVERY = 15  # steps without green at the goal before the view is solved 
 class ScriptedExpert:
     """Drives a FastEnv through every subtask; `act()` returns an action in the env's action space."""
 
-    def __init__(self, env, pivot_weight: float | None = None):
+    def __init__(self, env, pivot_weight: float | None = None, cable_weight: float = 0.005):
         self.env: FastEnv = env.unwrapped
         self.kin = Kinematics(self.env.task)
         periscoping = self.env.task_spec.task.kind == "periscoping"
         self.pivot_weight = pivot_weight if pivot_weight is not None else (0.3 if periscoping else 0.02)
+        self.cable_weight = cable_weight  # cost of turning the light cable when solving the view
         self.mode = self.env.task_spec.actions.mode
         self.discrete = self.mode == "discrete"
         if self.discrete:
@@ -39,12 +40,19 @@ class ScriptedExpert:
         if env.steps == 0:  # a new episode: the old goal belongs to the previous one
             self.reset()
         k = min(env.done_count, len(env.t_pos) - 1)
-        q = env.portal_coordinates()
+        return self.to_action(self.error(env.portal_coordinates(), k))
+
+    def error(self, q: np.ndarray, k: int) -> np.ndarray:
+        """Goal minus q for subtask k; the view is solved again for a new subtask or after waiting too long."""
+        env = self.env
         if self.goal_for != k or self.waiting > RESOLVE_EVERY:
             target = (env.t_pos[k], env.t_fwd[k], env.t_up[k])
-            self.goal, _ = solve_view(self.kin, k, q, target, self.pivot_weight)
+            self.goal, _ = solve_view(self.kin, k, q, target, self.pivot_weight, cable_weight=self.cable_weight)
             self.goal_for, self.waiting = k, 0
-        err = self.goal - q
+        return self.goal - q
+
+    def to_action(self, err: np.ndarray):
+        """The action that reduces a portal-coordinate error."""
         if self.discrete:
             return self._discrete(err)
         return self._rates(err) if self.mode == "rates" else self._continuous(err)

@@ -40,7 +40,7 @@ def view_residuals(pos, rot, target, fwd_t, up_t, dist_mid, dist_span) -> np.nda
 
 
 def solve_view(kin: Kinematics, k: int, q0: np.ndarray, target=None, pivot_weight: float = 0.02,
-               margin: float = 0.008) -> tuple[np.ndarray, float]:
+               margin: float = 0.008, cable_weight: float = 0.005) -> tuple[np.ndarray, float]:
     """Portal coordinates that centre, level and hold subtask k's avatar at mid distance, near q0."""
     task = kin.task
     t = task.targets
@@ -48,7 +48,7 @@ def solve_view(kin: Kinematics, k: int, q0: np.ndarray, target=None, pivot_weigh
     lo, hi = task.ranges[:, 0], task.ranges[:, 1]
     mid, span = float(t.dist[k].mean()), float(t.dist[k, 1] - t.dist[k, 0])
     radius = task.spec.scene.radius
-    reg = np.array([pivot_weight, pivot_weight, 0.2, 0.005, 0.005])
+    reg = np.array([pivot_weight, pivot_weight, 0.2, 0.005, cable_weight])
 
     def residuals(q):
         pos, rot = kin.camera(q)

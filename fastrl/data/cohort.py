@@ -1,0 +1,55 @@
+"""Synthetic trainee cohorts: trajectories of graded skill levels, and their figures by level."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+
+from ..env.fast_env import FastEnv
+from ..spec.models import TaskSpec
+from .replay import replay, rollout_trajectory
+from .skill import NOVICE, SkillProfile, profile_for_level
+from .trainee import Trainee
+from .trajectory import Trajectory
+
+
+def subject_name(level: int, index: int) -> str:
+    """A subject's name: level and 1-based index within the level, e.g. L2-S07."""
+    return f"L{level}-S{index:02d}"
+
+
+def make_cohort(spec: TaskSpec, levels: int, per_level: int, seed: int = 0, novice: SkillProfile = NOVICE,
+                env: FastEnv | None = None) -> Iterator[Trajectory]:
+    """Yield per_level trajectories for each level 1..levels (seeds seed, seed+1, ... in that order)."""
+    profiles = [profile_for_level(level, levels, novice) for level in range(1, levels + 1)]
+    if per_level < 1:
+        raise ValueError(f"per_level must be at least 1, got {per_level}")
+    env = env or FastEnv(spec)
+    for level, profile in enumerate(profiles, start=1):
+        for i in range(per_level):
+            s = seed + (level - 1) * per_level + i
+            trainee = Trainee(env, profile, s)
+            meta = {"source": "synthetic", "subject": subject_name(level, i + 1), "skill": level, "levels": levels,
+                    "profile": profile.as_dict()}
+            yield rollout_trajectory(env, trainee.act, s, meta, trainee.reset)[0]
+
+
+def replayed_figures(env, traj: Trajectory) -> dict:
+    """Heuristic return, subtasks done and duration of a trajectory, recomputed by replay."""
+    _, infos, rewards = replay(env, traj)
+    return {"return": float(rewards.sum()), "subtasks": int(infos[-1]["subtask"]), "duration": float(infos[-1]["time"])}
+
+
+def level_table(rows: list[dict]) -> list[dict]:
+    """Mean and sd of each figure by skill level, from rows with `skill`, `return`, `subtasks`, `duration`."""
+    table = []
+    for level in sorted({r["skill"] for r in rows}):
+        group = [r for r in rows if r["skill"] == level]
+        entry = {"skill": level, "n": len(group)}
+        for key in ("return", "subtasks", "duration"):
+            values = np.array([r[key] for r in group], float)
+            entry[key] = float(values.mean())
+            entry[f"{key}_sd"] = float(values.std(ddof=1)) if len(values) > 1 else 0.0
+        table.append(entry)
+    return table
