@@ -3,7 +3,7 @@
     python bench/sac_speed.py                      # all schedules, ~5 min on a quiet 2-core machine
     python bench/sac_speed.py --schedules sb3-default fast --steps 4000
 
-Each schedule trains SAC on TraceLines (continuous actions) with off-policy AIRL from 20 scripted-expert
+Each schedule trains SAC on TraceLines (rates actions) with off-policy AIRL from 20 scripted-expert
 demonstrations (current-rollout sampling, spectral norm), first past learning_starts (not timed), then for
 --steps environment steps (timed, best of --rounds). The reference is plain stable-baselines3 SAC with its
 default schedule (1 env, 1 gradient step per env step, batch 256, [256, 256]) and no discriminator, measured
@@ -40,7 +40,7 @@ def build(name: str, demos):
     from fastrl.spec import load_spec
 
     n_envs, freq, grad, batch, net, with_disc = SCHEDULES[name]
-    sets = ["actions.mode=continuous", "train.algo=SAC", f"train.n_envs={n_envs}", f"train.sac.train_freq={freq}",
+    sets = ["actions.mode=rates", "train.algo=SAC", f"train.n_envs={n_envs}", f"train.sac.train_freq={freq}",
             f"train.sac.gradient_steps={grad}", f"train.sac.batch_size={batch}", f"train.sac.net_arch={net}",
             "train.sac.learning_starts=1000"] + (["irl.algorithm=airl"] if with_disc else [])
     spec = load_spec("specs/tracelines.yaml", sets)

@@ -11,7 +11,7 @@ from fastrl.assess.kinematic import deviation_by_progress, log_dimensionless_jer
 from fastrl.assess.ranking import rank_correlations
 from fastrl.assess.references import reference_scores
 from fastrl.assess.report import build_report, score_files
-from fastrl.assess.scoring import Scorer, normalise, value_gain
+from fastrl.assess.scoring import Scorer, normalise
 from fastrl.cli import app
 from fastrl.data.replay import expert_trajectories, rollout_trajectory
 from fastrl.spec import load_spec
@@ -63,12 +63,6 @@ def test_deviation_is_zero_against_itself_and_the_offset_otherwise():
     assert np.allclose(deviation_by_progress(path, t, path, t), 0)
     slower = deviation_by_progress(path + [0, 0, 0.01], t * 2, path, t)
     assert slower.shape == (101,) and np.allclose(slower, 0.01)
-
-
-def test_value_gain_rewards_reaching_valuable_states_sooner():
-    quick, slow = np.array([-10.0, 0.0, 10.0]), np.array([-10.0, -5.0, 0.0, 5.0, 10.0])
-    assert value_gain(quick, 0.9) > value_gain(slow, 0.9)
-    assert value_gain(quick, 0.9) == pytest.approx(0.81 * 10 + 10)
 
 
 # --- ranking statistics on hand-made scores ---------------------------------------------------

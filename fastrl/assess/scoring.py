@@ -44,15 +44,6 @@ class TrajectoryScores:
         return self.meta.get("skill")
 
 
-def value_gain(values: np.ndarray, gamma: float) -> float:
-    """gamma^T V(s_T) - V(s_0): the discounted worth of where an attempt ended over where it began.
-
-    Only the endpoints count, so states off the experts' distribution (where a critic extrapolates) in the
-    middle of an attempt cannot inflate it; an attempt that reaches valuable states sooner scores higher.
-    """
-    return float(gamma ** (len(values) - 1) * values[-1] - values[0])
-
-
 def foreign_problem(traj: Trajectory, spec: TaskSpec) -> str | None:
     """Why a trajectory belongs to another task than `spec`, or None."""
     theirs = traj.meta.get("task_hash")
@@ -68,6 +59,10 @@ class Scorer:
     """Replays trajectories in one compiled task and scores them; learned scores need a run's networks."""
 
     def __init__(self, spec: TaskSpec, networks=None):
+        if networks is not None:
+            import torch
+
+            torch.set_num_threads(1)  # small MLPs on one trajectory: extra threads cost 50x on a busy machine
         self.spec, self.networks = spec, networks
         self.env = FastEnv(spec)
         self.kin = Kinematics(self.env.task)
@@ -79,9 +74,10 @@ class Scorer:
 
     def score(self, traj: Trajectory, name: str = "") -> TrajectoryScores:
         """Replay and score one trajectory."""
-        obs, infos, rewards = replay(self.env, traj)
+        tips = []
+        obs, infos, rewards = replay(self.env, traj, lambda u: tips.append(u.state.tip_pos))
         n = len(obs)
-        time, tip = traj.time[:n] - traj.time[0], self.tip_path(traj.portal[:n])
+        time, tip = traj.time[:n] - traj.time[0], np.array(tips)
         last = infos[-1]
         scores = {
             "heuristic": float(rewards.sum()),
@@ -95,7 +91,7 @@ class Scorer:
         if self.learned:
             scores["reward"] = float(self.networks.reward(obs).sum())
             values = self.networks.value(obs).astype(float)
-            scores["value"] = value_gain(values, self.networks.gamma)
+            scores["value"] = float(values.mean())
         meta = {**traj.meta, "success": bool(last["success"]), "subtasks_done": int(last["subtask"]),
                 "subtasks_total": int(last["subtasks_total"])}
         return TrajectoryScores(name or str(traj.meta.get("subject", "")), meta, scores, time, tip, values)

@@ -42,13 +42,20 @@ def expert_trajectories(env, seeds) -> list[Trajectory]:
     return [rollout_trajectory(env, expert.act, s, meta, expert.reset)[0] for s in seeds]
 
 
-def replay(env, traj: Trajectory) -> tuple[np.ndarray, list[dict], np.ndarray]:
-    """Observations, infos and rewards of a trajectory, recomputed by placing the scope at each sample."""
+def replay(env, traj: Trajectory, on_sample: Callable | None = None) -> tuple[np.ndarray, list[dict], np.ndarray]:
+    """Observations, infos and rewards of a trajectory, recomputed by placing the scope at each sample.
+
+    `on_sample(env)`, if given, is called after each sample is placed (to read more of the state).
+    """
     u = env.unwrapped
     obs, info = u.reset(seed=int(traj.meta.get("seed", 0)), options={"portal": traj.portal[0]})
+    if on_sample is not None:
+        on_sample(u)
     observations, infos, rewards = [obs], [info], [0.0]
     for q in traj.portal[1:]:
         obs, reward, term, trunc, info = u.replay_step(q)
+        if on_sample is not None:
+            on_sample(u)
         observations.append(obs)
         infos.append(info)
         rewards.append(reward)
