@@ -62,19 +62,29 @@ def build_report(scored: list[TrajectoryScores], references: dict, problems: lis
     keys = tuple(k for k in COLUMNS if learned or k not in ("reward", "value"))
     by = group_key(rows) if rows else "subject"
     grouped = [{**r, "subject": f"level {r['skill']}" if by == "skill" else r["subject"]} for r in rows]
-    report = {"references": references, "grouped_by": by, "scores": list(keys),
+    warnings = [f"{k}: the random policy scores above the scripted expert ({references['random'][k]:.4g} vs "
+                f"{references['expert'][k]:.4g}), so its normalised values run the other way"
+                for k in NORMALISED if k in keys and _inverted(references, k)]
+    report = {"references": references, "warnings": warnings, "grouped_by": by, "scores": list(keys),
               "normalisation": "heuristic, reward, value: 0 = random policy, 1 = scripted expert; "
                                "subtasks: fraction done; path_length m, time s, smoothness = log dimensionless jerk",
               "groups": subject_table(grouped, keys), "trajectories": rows, "problems": problems, "ranking": {}}
     labelled = [r for r in rows if isinstance(r["skill"], int | float)]
     if len({r["skill"] for r in labelled}) > 1:
         for k in keys:
-            vals = [r[k] if r[k] is not None else float("nan") for r in labelled]
+            raw = k + "_raw" if k in NORMALISED else k  # normalising by references may flip the order: rank raw
+            vals = [r[raw] if r[raw] is not None else float("nan") for r in labelled]
             sign = 1.0 if HIGHER_IS_BETTER[k] else -1.0  # rank so that "better" agrees with a higher label
             result = rank_correlations([sign * v for v in vals], [r["skill"] for r in labelled])
             result["level_means"] = {level: sign * m for level, m in result["level_means"].items()}
             report["ranking"][k] = {**result, "higher_is_better": HIGHER_IS_BETTER[k]}
     return report
+
+
+def _inverted(references: dict, key: str) -> bool:
+    """True where the random reference is above the expert one."""
+    lo, hi = references.get("random", {}).get(key), references.get("expert", {}).get(key)
+    return lo is not None and hi is not None and hi < lo
 
 
 def csv_text(report: dict) -> str:

@@ -42,6 +42,8 @@ def score(
     report = result.report
     for problem in report["problems"]:
         err.print(f"skipped {problem}", markup=False, style="yellow")
+    for warning in report["warnings"]:
+        err.print(f"note: {warning}", markup=False, style="yellow")
     if not report["trajectories"]:
         err.print("no trajectory could be scored", markup=False)
         raise typer.Exit(code=2)

@@ -42,7 +42,7 @@ def markdown_table(report: dict) -> str:
                 return "-" if v is None else f"{v:.2f}" + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "")
             lines.append(f"| {k} | {fmt(r['spearman'], r['spearman_ci'])} | {fmt(r['kendall_tau_b'], r['kendall_ci'])}"
                          f" | {'yes' if r['levels_in_order'] else 'no'} |")
-    lines += ["", report["normalisation"]]
+    lines += ["", report["normalisation"]] + [f"\n_Note: {w}_" for w in report.get("warnings", [])]
     if report["problems"]:
         lines += ["", "## Files not scored", ""] + [f"- {p}" for p in report["problems"]]
     return "\n".join(lines)
