@@ -248,3 +248,16 @@ def test_reward_normalisation_defaults_on_for_ppo_and_off_for_sac(algo, setting,
         sets.append(f"train.normalize.reward={str(setting).lower()}")
     venv = make_vec_env(load_spec(spec_file("tracelines"), sets), 1, 0)
     assert venv.norm_reward is expected
+
+
+def test_stepping_after_a_replayed_pose_matches_stepping_after_placing_it():
+    a, b = (fastrl.make(spec_file("tracelines")) for _ in range(2))
+    a.reset(seed=4)
+    b.reset(seed=4)
+    q = a.unwrapped.portal_coordinates() + np.array([0.02, -0.01, 0.003, 0.1, 0.2])
+    a.unwrapped.replay_step(q)  # positions only
+    b.unwrapped.set_portal_coordinates(q)  # full forward
+    for action in (1, 3, 5, 9, 0):
+        oa, *_ = a.step(action)
+        ob, *_ = b.step(action)
+        assert np.allclose(oa, ob, atol=1e-6)

@@ -60,6 +60,7 @@ class FastEnv(gym.Env):
         self.state.subtasks_total = len(self.task.targets)
         self.lens, self.cable = self.task.lens_qadr, int(self.task.qadr[4])
         self._renderer = None
+        self._positions_only = False
         self._frames = np.zeros((self.stack, self.obs_dim), np.float32)
         self._reset_targets()
 
@@ -88,6 +89,9 @@ class FastEnv(gym.Env):
     def step(self, action):
         """Apply one action for 1/control_hz seconds of physics and score the new state."""
         m, d = self.model, self.data
+        if self._positions_only:  # the last pose came from replay: complete mj_forward before stepping
+            mujoco.mj_forward(m, d)
+            self._positions_only = False
         self.target = self.actions.targets(action, self.target, self.state.portal, m, d)
         d.ctrl[:] = self.target
         mujoco.mj_step2(m, d)
@@ -101,7 +105,7 @@ class FastEnv(gym.Env):
 
     def replay_step(self, portal):
         """Place the scope at recorded portal coordinates and score it like a step (for replay)."""
-        self._place(np.asarray(portal, float))
+        self._place(np.asarray(portal, float), positions_only=True)
         return self._advance()
 
     def render(self):
@@ -206,18 +210,22 @@ class FastEnv(gym.Env):
             "time": s.time,
         }
 
-    def _place(self, q: np.ndarray) -> None:
-        """Set the portal joints to q (clipped to their ranges), at rest, and recompute positions."""
-        if q.shape != (5,) or not np.all(np.isfinite(q)):
+    def _place(self, q: np.ndarray, positions_only: bool = False) -> None:
+        """Set the portal joints to q (clipped to their ranges), at rest, and recompute positions.
+
+        positions_only (replay): kinematics and contacts only; a later step() needs the full mj_forward.
+        """
+        if q.shape != (5,) or not np.isfinite(q).all():
             raise ValueError(f"portal coordinates must be 5 finite numbers, got {q!r}")
-        q = np.clip(q, self.task.ranges[:, 0], self.task.ranges[:, 1])
+        q = np.minimum(np.maximum(q, self.task.ranges[:, 0]), self.task.ranges[:, 1])
         m, d = self.model, self.data
         d.qpos[self.task.qadr] = q
         d.qpos[self.task.lens_qadr] = -q[4]
         d.qvel[:] = 0.0
         d.ctrl[:] = q
         self.target = q.tolist()
-        mujoco.mj_forward(m, d)
+        self._positions_only = positions_only
+        (mujoco.mj_fwdPosition if positions_only else mujoco.mj_forward)(m, d)
 
     def _start_pose(self) -> np.ndarray:
         """The spec's start pose plus its uniform noise."""
