@@ -46,7 +46,7 @@ def plot_paths(scored: list[TrajectoryScores], by: str, path: Path, radius: floa
     xy_all = np.concatenate([s.tip[:, :2] for s in scored]) * 1000
     (x0, y0), (x1, y1) = xy_all.min(axis=0) - 10, xy_all.max(axis=0) + 10
     with_values = [s.values for s in scored if s.values is not None]
-    lo, hi = (np.percentile(np.concatenate(with_values), [2, 98]) if with_values else (0.0, 1.0))
+    lo, hi = (np.percentile(np.concatenate(with_values), [5, 95]) if with_values else (0.0, 1.0))
     sc = None
     for ax, (name, members) in zip(axes[0], groups):
         ax.add_patch(plt.Circle((0, 0), radius * 1000, fill=False, color="0.6", lw=1))
@@ -62,7 +62,7 @@ def plot_paths(scored: list[TrajectoryScores], by: str, path: Path, radius: floa
     axes[0][0].set_ylabel("y (mm)")
     if sc is not None:
         fig.colorbar(sc, ax=axes[0].tolist(), label="learned value V(s)" if with_values else "time (s)", shrink=0.8)
-    fig.suptitle("Tip paths on the dome's XY plane (grey circle: dome; black star: start, red star: end)",
+    fig.suptitle("Camera paths projected on the dome's XY plane (black star: start, red star: end)",
                  fontsize=10)
     return _save(fig, path)
 

@@ -42,7 +42,8 @@ def row(s: TrajectoryScores) -> dict:
     out = {"file": s.name, "subject": s.subject, "skill": s.skill, "source": s.meta.get("source"),
            "success": s.meta.get("success")}
     for k in COLUMNS:
-        out[k] = s.normalised.get(k) if k in NORMALISED else s.scores.get(k)
+        normalised = s.normalised.get(k)
+        out[k] = normalised if k in NORMALISED and normalised is not None else s.scores.get(k)
         if k in NORMALISED:
             out[k + "_raw"] = s.scores.get(k)
     return out
@@ -63,7 +64,7 @@ def build_report(scored: list[TrajectoryScores], references: dict, problems: lis
     by = group_key(rows) if rows else "subject"
     grouped = [{**r, "subject": f"level {r['skill']}" if by == "skill" else r["subject"]} for r in rows]
     warnings = [f"{k}: the random policy scores above the scripted expert ({references['random'][k]:.4g} vs "
-                f"{references['expert'][k]:.4g}), so its normalised values run the other way"
+                f"{references['expert'][k]:.4g}): it is shown raw, not normalised"
                 for k in NORMALISED if k in keys and _inverted(references, k)]
     report = {"references": references, "warnings": warnings, "grouped_by": by, "scores": list(keys),
               "normalisation": "heuristic, reward, value: 0 = random policy, 1 = scripted expert; "

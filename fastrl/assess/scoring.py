@@ -108,11 +108,12 @@ class Scorer:
 
 
 def normalise(scored: list[TrajectoryScores], references: dict) -> None:
-    """Fill each score's `normalised` with (x - random) / (expert - random) for the NORMALISED keys."""
+    """Fill each score's `normalised` with (x - random) / (expert - random) for the NORMALISED keys (None where
+    the expert does not score above the random policy: such a scale would run backwards)."""
     for s in scored:
         for key in NORMALISED:
             lo, hi, x = references["random"].get(key), references["expert"].get(key), s.scores.get(key)
-            if x is None or lo is None or hi is None or abs(hi - lo) < 1e-12:
+            if x is None or lo is None or hi is None or hi - lo < 1e-12:  # no gap, or random above expert
                 s.normalised[key] = None
             else:
                 s.normalised[key] = (x - lo) / (hi - lo)

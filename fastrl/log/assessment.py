@@ -57,7 +57,7 @@ def log_assessment(path: Path, recording_id: str, task: CompiledTask, scored, re
     try:
         log_scene(rec, task, root="world")
         values = [s.values for s in scored if s.values is not None]
-        lo, hi = np.percentile(np.concatenate(values), [2, 98]) if values else (0.0, 1.0)
+        lo, hi = np.percentile(np.concatenate(values), [5, 95]) if values else (0.0, 1.0)
         for s in scored:
             base = f"{_slug(group_of(s))}/{_slug(s.name)}"
             v = s.values if s.values is not None else s.time
