@@ -1,0 +1,131 @@
+"""The MuJoCo viewer as the trainee's screen: 3D scene, endoscope image, key map, status, cue, suggestions."""
+
+from __future__ import annotations
+
+import mujoco
+import mujoco.viewer
+import numpy as np
+
+from ..assist import cue_colour, draw_path, project_points
+from ..env.fast_env import GREEN
+from ..env.render import outside_camera
+from .keymap import key_table
+
+PATH_RGBA = np.array([1.0, 0.1, 0.9, 0.9], np.float32)
+SMALL, BIG = mujoco.mjtFontScale.mjFONTSCALE_100, mujoco.mjtFontScale.mjFONTSCALE_150
+GRID = mujoco.mjtGridPos
+RND = mujoco.mjtRndFlag
+
+
+class Display:
+    """A passive viewer window (its own GUI thread) that the session updates once per tick."""
+
+    def __init__(self, env, on_key, image_px: int = 384):
+        self.env, self.image_px = env, image_px
+        self.handle = mujoco.viewer.launch_passive(env.model, env.data, key_callback=on_key,
+                                                   show_left_ui=False, show_right_ui=False)
+        cam = outside_camera(env.task)
+        with self.handle.lock():
+            c = self.handle.cam
+            c.lookat[:], c.distance, c.azimuth, c.elevation = cam.lookat, cam.distance, cam.azimuth, cam.elevation
+            self.handle.opt.geomgroup[2] = 0  # hide the dome's shell: the inside shows
+            for flag in (RND.mjRND_SHADOW, RND.mjRND_REFLECTION, RND.mjRND_SKYBOX):  # software GL: keep frames cheap
+                self.handle.user_scn.flags[flag] = 0  # the viewer copies user_scn's flags into its scene
+        self.keys = key_table()
+        self.footer = ""
+
+    def lock(self):
+        """The viewer's lock: hold it while changing the model or data."""
+        return self.handle.lock()
+
+    def running(self) -> bool:
+        """Whether the window is still open."""
+        return self.handle.is_running()
+
+    def show(self, session) -> bool:
+        """Draw the current state; False once the window has been closed."""
+        if not self.handle.is_running():
+            return False
+        env = self.env
+        info, s = session.info, env.state
+        total = info["subtasks_total"]
+        cue = "GREEN (hold)" if info["cue"]["green"] else "orange"
+        status = [("subject", session.writer.meta["subject"]), ("subtask", f"{min(info['subtask'] + 1, total)} of {total}"
+                  f" ({info['subtask']} done)"), ("time", f"{info['time']:.1f} s of {session.spec.episode.time_limit:g} s"),
+                  ("avatar cue", f"{cue}  dwell {100 * info['cue']['dwell']:.0f}%"),
+                  (f"{session.assist.cue.kind} cue", f"{100 * session.cue_level:.0f}%")]
+        if session.suggestion is not None:
+            sg = session.suggestion
+            status.append(("suggestion", f"{'reaches' if sg.reached else 'does not reach'} the next avatar "
+                                         f"({sg.ms:.0f} ms)"))
+        texts = [(SMALL, GRID.mjGRID_TOPLEFT, *self.keys),
+                 (BIG, GRID.mjGRID_TOPRIGHT, "\n".join(k for k, _ in status), "\n".join(v for _, v in status))]
+        if self.footer:
+            texts.append((SMALL, GRID.mjGRID_BOTTOMRIGHT, self.footer, ""))
+        self.handle.set_texts(texts)
+        self.handle.set_images(self._images(session))
+        self._draw_path(session.suggestion)
+        self.handle.sync()
+        return True
+
+    def _images(self, session) -> list:
+        """The endoscope image (with the suggested path projected) and two colour bars: avatar cue, value cue."""
+        env, px = self.env, self.image_px
+        img = env.render()
+        sg = session.suggestion
+        if sg is not None and len(sg.tip) > 1:
+            d = env.data
+            uv, front = project_points(sg.tip[1:], d.cam_xpos[env.task.camera], d.cam_xmat[env.task.camera],
+                                       float(env.model.cam_fovy[env.task.camera]), img.shape[1], img.shape[0])
+            img = draw_path(img, uv, front, (255, 30, 230), width=2)
+        scale = max(1, px // img.shape[0])
+        big = np.ascontiguousarray(np.repeat(np.repeat(img, scale, 0), scale, 1))
+        h = big.shape[0]
+        avatar = (np.array(GREEN[:3]) * 255).astype(np.uint8) if session.info["cue"]["green"] else \
+            np.array([255, 140, 0], np.uint8)
+        bar = np.zeros((h, 24, 3), np.uint8)
+        bar[:] = avatar
+        value = np.zeros((h, 24, 3), np.uint8)
+        value[:] = cue_colour(session.cue_level)
+        value[: int(round(h * (1 - session.cue_level)))] //= 4  # filled to the level, from the bottom
+        return [(mujoco.MjrRect(0, 0, big.shape[1], h), big),
+                (mujoco.MjrRect(big.shape[1] + 4, 0, 24, h), np.ascontiguousarray(bar)),
+                (mujoco.MjrRect(big.shape[1] + 32, 0, 24, h), np.ascontiguousarray(value))]
+
+    def _draw_path(self, sg) -> None:
+        """The suggested tip path as capsules in the 3D scene."""
+        scn = self.handle.user_scn
+        with self.handle.lock():
+            scn.ngeom = 0
+            if sg is None:
+                return
+            for a, b in zip(sg.tip[:-1], sg.tip[1:]):
+                if scn.ngeom >= scn.maxgeom or np.linalg.norm(b - a) < 1e-6:
+                    continue
+                g = scn.geoms[scn.ngeom]
+                mujoco.mjv_initGeom(g, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3), np.eye(3).ravel(),
+                                    PATH_RGBA)
+                mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_CAPSULE, 0.0008, a, b)
+                scn.ngeom += 1
+
+    def linger(self, text: str, seconds: float) -> None:
+        """Show `text` (the feedback) until the window closes or `seconds` pass (forever if negative)."""
+        import time
+
+        self.footer = text
+        end = time.monotonic() + (seconds if seconds >= 0 else float("inf"))
+        while self.handle.is_running() and time.monotonic() < end:
+            self.handle.set_texts([(SMALL, GRID.mjGRID_TOPLEFT, *self.keys),
+                                   (SMALL, GRID.mjGRID_TOPRIGHT, text, "")])
+            self.handle.sync()
+            time.sleep(0.1)
+
+    def close(self) -> None:
+        """Close the window and wait for the GUI thread to let go of GLFW (exiting earlier can crash)."""
+        import time
+
+        self.handle.close()
+        end = time.monotonic() + 5.0
+        while self.handle.is_running() and time.monotonic() < end:
+            time.sleep(0.05)
+        time.sleep(0.3)
