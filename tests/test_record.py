@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from fastrl.assess.scoring import Scorer
 from fastrl.assist import Suggester, project_points
 from fastrl.assist.feedback import attempt_feedback, feedback_text
-from fastrl.assess.scoring import Scorer
 from fastrl.cli import app
 from fastrl.data.replay import cue_events, replay
 from fastrl.data.trajectory import Trajectory
@@ -30,8 +30,8 @@ from .test_runner import only_run, recorded, rrd_verify
 
 ROOT = Path(__file__).resolve().parent.parent
 # wide tolerances: the cue turns green and subtasks complete while keys move the scope, so there are events
-EASY = ["episode.time_limit=5", "task.cue.centring_deg=40", "task.cue.horizon_deg=180", "task.cue.distance=[0.001, 0.2]",
-        "task.cue.dwell=0.4"]
+EASY = ["episode.time_limit=5", "task.cue.centring_deg=40", "task.cue.horizon_deg=180",
+        "task.cue.distance=[0.001, 0.2]", "task.cue.dwell=0.4"]
 UP, ESC = 265, 256
 
 needs_x = pytest.mark.skipif(not (shutil.which("Xvfb") and shutil.which("xdotool")), reason="needs Xvfb and xdotool")
@@ -91,7 +91,7 @@ def only_attempt(out: Path) -> Trajectory:
 @needs_x
 def test_keystrokes_to_the_real_window_drive_the_scope_and_the_attempt_replays_to_the_same_cue_events(display,
                                                                                                     tmp_path):
-    proc = start_record(display, tmp_path, ["--no-feedback"])
+    proc = start_record(display, tmp_path)
     time.sleep(0.5)
     xdotool(display, "search", "--name", "MuJoCo", "windowfocus", "keydown", "Up", "sleep", "1.0", "keyup", "Up")
     time.sleep(0.5)
@@ -110,6 +110,16 @@ def test_keystrokes_to_the_real_window_drive_the_scope_and_the_attempt_replays_t
     assert m["realtime"]["period_ms_mean"] < 60                 # real time at the control rate
     _, infos, _ = replay(FastEnv(spec), traj)
     assert len(m["events"]) >= 2 and cue_events(infos) == m["events"]
+    fb = m["feedback"]  # scored when it ended; the same in the file, beside it, and in its Rerun recording
+    assert fb["scores"]["time"] == pytest.approx(traj.time[-1]) and fb["worst_moments"]
+    saved = next(f for f in tmp_path.glob("*.npz") if ".partial" not in f.name)
+    assert saved.with_suffix(".feedback.json").exists() and "/summary" in recorded(saved.with_suffix(".rrd"))[0]
+    # and `fastrl replay` plays it back in the viewer and into Rerun
+    res = subprocess.run([sys.executable, "-m", "fastrl.cli", "replay", str(saved), "--speed", "4"], env=xenv(display),
+                         capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert f"played {len(traj.time)} of {len(traj.time)} samples" in res.stdout
+    rrd_verify(saved.with_suffix(".replay.rrd"))
 
 
 @needs_x
@@ -188,8 +198,8 @@ def test_assist_writes_suggestions_and_value_into_rerun_and_feedback_scores_the_
     assert res.exit_code == 0, res.output
     rrd_verify(out)
     entities, timelines = recorded(out)
-    assert {"/world/attempt/suggestion", "/metrics/attempt/cue/value", "/world/attempt/camera/image/suggestion"} \
-        <= entities and "step" in timelines
+    assert {"/world/attempt/suggestion/tip", "/world/attempt/suggestion/view_centre", "/metrics/attempt/cue/value",
+            "/world/attempt/camera/image/suggestion/view_centre"} <= entities and "step" in timelines
     spec = load_spec(tiny_run / "spec.yaml")
     fb = attempt_feedback(Scorer(spec, load_networks(tiny_run / "networks")), Trajectory.load(demo),
                           tmp_path / "refs.json", references=1)

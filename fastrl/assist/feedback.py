@@ -61,7 +61,8 @@ def feedback_text(fb: dict) -> str:
         lines.append(f"mean learned value {s['value_mean']:.2f}")
     if fb["worst_moments"]:
         lines.append("largest deviations from the expert's path:")
-        lines += [f"  at {m['percent']}% ({m['time_s']:.1f} s): {m['deviation_mm']:.0f} mm" for m in fb["worst_moments"]]
+        lines += [f"  at {m['percent']}% ({m['time_s']:.1f} s): {m['deviation_mm']:.0f} mm"
+                  for m in fb["worst_moments"]]
     return "\n".join(lines)
 
 

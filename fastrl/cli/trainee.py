@@ -98,9 +98,9 @@ def assist_cmd(
     every: Annotated[float, typer.Option(help="seconds between suggestions")] = 1.0,
 ) -> None:
     """Assist a recorded attempt offline: suggestions at regular points and the value along the way, in Rerun."""
+    from ..assess.scoring import foreign_problem
     from ..data.trajectory import Trajectory, TrajectoryError
     from ..spec import SpecError
-    from ..assess.scoring import foreign_problem
     from ..teleop.offline import attempt_recording, spec_of_run, spec_of_trajectory
 
     try:

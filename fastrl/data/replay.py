@@ -90,7 +90,7 @@ def expert_transitions(env, trajectories: list[Trajectory]) -> Transitions:
 
 
 def cue_events(infos: list[dict]) -> list[list]:
-    """[step, kind, value] whenever the cue turns green or back ("green", bool) or a subtask completes ("subtask", n)."""
+    """[step, kind, value] when the cue turns green or back ("green", bool) or a subtask completes ("subtask", n)."""
     events, green, subtask = [], None, None
     for step, info in enumerate(infos):
         if info["subtask"] != subtask:

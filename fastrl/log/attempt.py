@@ -15,13 +15,13 @@ from .layout import BACKGROUND
 from .scene import default_eye, log_scene
 
 WORLD, METRICS = "world/attempt", "metrics/attempt"
-REACHED, MISSED = (255, 30, 230), (150, 150, 150)
+TIP, AIM, MISSED = (255, 30, 230), (0, 215, 240), (150, 150, 150)  # as in the viewer; grey: does not reach
 
 
 def log_attempt(path: Path, recording_id: str, task: CompiledTask, ep: EpisodeRecord, cue: np.ndarray | None = None,
                 cue_colours: np.ndarray | None = None, suggestions: list | None = None, feedback: str | None = None,
                 cue_kind: str = "value") -> Path:
-    """Write an .rrd: scene, episode (scope, camera, images, cues), suggestions at their steps, cue series, text."""
+    """Write an .rrd: scene, episode, suggested tip and view-centre paths at their steps, cue series, feedback."""
     rec = rr.RecordingStream("fastrl", recording_id=recording_id)
     rec.set_log_time_enabled(False)
     rec.save(path)
@@ -37,13 +37,16 @@ def log_attempt(path: Path, recording_id: str, task: CompiledTask, ep: EpisodeRe
             n = len(ep.time)
             rec.send_columns(f"{WORLD}/value_cue", indexes=index, columns=rr.Points3D.columns(
                 positions=ep.tip_pos, colors=cue_colours, radii=np.full(n, 0.003)))
-        for step, sg, uv in suggestions or []:
+        for step, sg, uv_tip, uv_aim in suggestions or []:
             rec.set_time("step", sequence=int(step))
             rec.set_time("sim_time", duration=float(ep.time[step]))
-            colour = REACHED if sg.reached else MISSED
-            rec.log(f"{WORLD}/suggestion", rr.LineStrips3D([sg.tip], colors=[colour], radii=0.0006))
-            if uv is not None:
-                rec.log(f"{WORLD}/camera/image/suggestion", rr.LineStrips2D([uv], colors=[colour], radii=1.0))
+            colour = TIP if sg.reached else MISSED
+            aim = sg.aim[np.isfinite(sg.aim).all(axis=1)]
+            rec.log(f"{WORLD}/suggestion/tip", rr.LineStrips3D([sg.tip], colors=[colour], radii=0.0006))
+            rec.log(f"{WORLD}/suggestion/view_centre", rr.LineStrips3D([aim], colors=[AIM], radii=0.0005))
+            for name, uv, c in (("tip", uv_tip, colour), ("view_centre", uv_aim, AIM)):
+                rec.log(f"{WORLD}/camera/image/suggestion/{name}",
+                        rr.LineStrips2D([uv] if uv is not None else [], colors=[c], radii=1.0))
             rec.log(f"{METRICS}/suggestion/reached", rr.Scalars(float(sg.reached)))
             rec.log(f"{METRICS}/suggestion/ms", rr.Scalars(sg.ms))
         if feedback:

@@ -11,7 +11,10 @@ from ..env.fast_env import GREEN
 from ..env.render import outside_camera
 from .keymap import key_table
 
-PATH_RGBA = np.array([1.0, 0.1, 0.9, 0.9], np.float32)
+PATH_RGBA = np.array([1.0, 0.1, 0.9, 0.9], np.float32)   # suggested tip path (3D)
+AIM_RGBA = np.array([0.0, 0.85, 0.95, 0.9], np.float32)   # suggested view centre on the scene (3D)
+TIP_RGB, AIM_RGB = (255, 30, 230), (0, 215, 240)
+LIFT = np.array([0.0, 0.0, 0.0005])  # keep paths on the plate visible
 SMALL, BIG = mujoco.mjtFontScale.mjFONTSCALE_100, mujoco.mjtFontScale.mjFONTSCALE_150
 GRID = mujoco.mjtGridPos
 RND = mujoco.mjtRndFlag
@@ -46,12 +49,11 @@ class Display:
         """Draw the current state; False once the window has been closed."""
         if not self.handle.is_running():
             return False
-        env = self.env
-        info, s = session.info, env.state
-        total = info["subtasks_total"]
+        info, total = session.info, session.info["subtasks_total"]
         cue = "GREEN (hold)" if info["cue"]["green"] else "orange"
-        status = [("subject", session.writer.meta["subject"]), ("subtask", f"{min(info['subtask'] + 1, total)} of {total}"
-                  f" ({info['subtask']} done)"), ("time", f"{info['time']:.1f} s of {session.spec.episode.time_limit:g} s"),
+        status = [("subject", session.writer.meta["subject"]),
+                  ("subtask", f"{min(info['subtask'] + 1, total)} of {total} ({info['subtask']} done)"),
+                  ("time", f"{info['time']:.1f} s of {session.spec.episode.time_limit:g} s"),
                   ("avatar cue", f"{cue}  dwell {100 * info['cue']['dwell']:.0f}%"),
                   (f"{session.assist.cue.kind} cue", f"{100 * session.cue_level:.0f}%")]
         if session.suggestion is not None:
@@ -74,10 +76,12 @@ class Display:
         img = env.render()
         sg = session.suggestion
         if sg is not None and len(sg.tip) > 1:
-            d = env.data
-            uv, front = project_points(sg.tip[1:], d.cam_xpos[env.task.camera], d.cam_xmat[env.task.camera],
-                                       float(env.model.cam_fovy[env.task.camera]), img.shape[1], img.shape[0])
-            img = draw_path(img, uv, front, (255, 30, 230), width=2)
+            d, cam = env.data, env.task.camera
+            for points, colour, width in ((sg.tip[1:], TIP_RGB, 1), (sg.aim, AIM_RGB, 2)):
+                ok = np.isfinite(points).all(axis=1)
+                uv, front = project_points(points[ok], d.cam_xpos[cam], d.cam_xmat[cam],
+                                           float(env.model.cam_fovy[cam]), img.shape[1], img.shape[0])
+                img = draw_path(img, uv, front, colour, width)
         scale = max(1, px // img.shape[0])
         big = np.ascontiguousarray(np.repeat(np.repeat(img, scale, 0), scale, 1))
         h = big.shape[0]
@@ -99,14 +103,21 @@ class Display:
             scn.ngeom = 0
             if sg is None:
                 return
-            for a, b in zip(sg.tip[:-1], sg.tip[1:]):
-                if scn.ngeom >= scn.maxgeom or np.linalg.norm(b - a) < 1e-6:
-                    continue
-                g = scn.geoms[scn.ngeom]
-                mujoco.mjv_initGeom(g, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3), np.eye(3).ravel(),
-                                    PATH_RGBA)
-                mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_CAPSULE, 0.0008, a, b)
-                scn.ngeom += 1
+            for path, rgba, radius in ((sg.tip, PATH_RGBA, 0.0008), (sg.aim, AIM_RGBA, 0.0006)):
+                for a, b in zip(path[:-1], path[1:]):
+                    if scn.ngeom >= scn.maxgeom or not np.isfinite(a).all() or not np.isfinite(b).all() \
+                            or np.linalg.norm(b - a) < 1e-6:
+                        continue
+                    g = scn.geoms[scn.ngeom]
+                    mujoco.mjv_initGeom(g, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3),
+                                        np.eye(3).ravel(), rgba)
+                    mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_CAPSULE, radius, a + LIFT, b + LIFT)
+                    scn.ngeom += 1
+
+    def message(self, text: str) -> None:
+        """Replace the status with one message (e.g. while the attempt is scored)."""
+        self.handle.set_texts([(SMALL, GRID.mjGRID_TOPLEFT, *self.keys), (BIG, GRID.mjGRID_TOPRIGHT, text, "")])
+        self.handle.sync()
 
     def linger(self, text: str, seconds: float) -> None:
         """Show `text` (the feedback) until the window closes or `seconds` pass (forever if negative)."""

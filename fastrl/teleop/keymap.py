@@ -40,7 +40,9 @@ assert all(DISCRETE_MEANINGS[k.action] for k in KEYS if k.action is not None)
 def key_table() -> tuple[str, str]:
     """The key map as the viewer's two text columns (keys, what they do)."""
     keys = [KEY_NAMES.get(k.name, k.name) for k in KEYS]
-    return "\n".join(keys + ["mouse"]), "\n".join([k.label for k in KEYS] + ["drag: turn the 3D view"])
+    return ("\n".join(keys + ["mouse", "", "bars", "paths"]),
+            "\n".join([k.label for k in KEYS] + ["drag: turn the 3D view, scroll: zoom", "",
+                                                 "avatar cue | value cue", "magenta: tip, cyan: view centre"]))
 
 
 def key_markdown() -> str:

@@ -73,9 +73,13 @@ def attempt_recording(spec: TaskSpec, traj: Trajectory, out: Path, run: Path | N
         if suggester is not None and every_s is not None and step % every == 0:
             sg = suggester.suggest(u)
             cam = u.task.camera
-            uv, front = project_points(sg.tip, u.data.cam_xpos[cam], u.data.cam_xmat[cam],
-                                       float(u.model.cam_fovy[cam]), u.width, u.height)
-            suggestions.append((step, sg, uv[front] if front.any() else None))
+            uvs = []
+            for points in (sg.tip, sg.aim):
+                points = points[np.isfinite(points).all(axis=1)]
+                uv, front = project_points(points, u.data.cam_xpos[cam], u.data.cam_xmat[cam],
+                                           float(u.model.cam_fovy[cam]), u.width, u.height)
+                uvs.append(uv[front] if front.sum() > 1 else None)
+            suggestions.append((step, sg, *uvs))
 
     ep, _ = replay_episode(env, traj, image_every, on_step)
     colours = np.array([cue_colour(x) for x in levels], np.uint8) if levels else None

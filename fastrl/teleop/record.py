@@ -79,6 +79,8 @@ def record(spec: TaskSpec, subject: str, out_dir: Path, run: Path | None = None,
             display.close()
         return result
     if feedback:
+        if display is not None:
+            display.message("scoring the attempt ...")
         traj = Trajectory.load(saved)
         scorer = Scorer(spec, load_networks_of(run) if run is not None else None)
         fb = attempt_feedback(scorer, traj, Path(out_dir) / f"references-{traj.meta['task_hash']}.json")
