@@ -201,7 +201,9 @@ def test_assist_writes_suggestions_and_value_into_rerun_and_feedback_scores_the_
     assert {"/world/attempt/suggestion/tip", "/world/attempt/suggestion/view_centre", "/metrics/attempt/cue/value",
             "/world/attempt/camera/image/suggestion/view_centre"} <= entities and "step" in timelines
     spec = load_spec(tiny_run / "spec.yaml")
-    fb = attempt_feedback(Scorer(spec, load_networks(tiny_run / "networks")), Trajectory.load(demo),
-                          tmp_path / "refs.json", references=1)
+    nets = load_networks(tiny_run / "networks")
+    fb = attempt_feedback(Scorer(spec, nets), Trajectory.load(demo), tmp_path / "refs.json", references=1,
+                          policy=nets.policy)
     assert fb["normalised"]["heuristic"] is not None and fb["scores"]["reward"] is not None
+    assert fb["agent"]["time"] > 0 and "trained agent" in feedback_text(fb)
     assert 1 <= len(fb["worst_moments"]) <= 3 and "largest deviations" in feedback_text(fb)

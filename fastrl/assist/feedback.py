@@ -9,7 +9,7 @@ import numpy as np
 from ..assess.figures import deviations
 from ..assess.references import expert_paths, reference_scores
 from ..assess.scoring import Scorer, normalise
-from ..data.replay import replay
+from ..data.replay import replay, rollout_trajectory
 from ..data.trajectory import Trajectory
 
 
@@ -26,8 +26,12 @@ def worst_moments(dev_mm: np.ndarray, duration: float, k: int = 3, apart: int = 
              "deviation_mm": round(float(dev_mm[i]), 1)} for i in sorted(chosen)]
 
 
-def attempt_feedback(scorer: Scorer, traj: Trajectory, cache: Path | None = None, references: int = 2) -> dict:
-    """Scores of one attempt, normalised against random (0) and the scripted expert (1), and where it deviated."""
+def attempt_feedback(scorer: Scorer, traj: Trajectory, cache: Path | None = None, references: int = 2,
+                     policy=None) -> dict:
+    """Scores of one attempt, normalised against random (0) and the scripted expert (1), and where it deviated.
+
+    With `policy` (a trained agent, batch obs -> actions) the agent's own episode from the same seed is scored too.
+    """
     refs = reference_scores(scorer, references, cache)
     scored = scorer.score(traj, "attempt")
     normalise([scored], refs)
@@ -39,6 +43,10 @@ def attempt_feedback(scorer: Scorer, traj: Trajectory, cache: Path | None = None
         obs, _, _ = replay(scorer.env, traj)
         values = nets.value(obs).astype(float)
         out["scores"]["value_mean"] = float(values.mean())
+    if policy is not None:
+        agent, _ = rollout_trajectory(scorer.env, lambda o: policy(o[None])[0], int(traj.meta.get("seed", 0)),
+                                      {"source": "agent", "subject": "trained agent"})
+        out["agent"] = scorer.score(agent, "agent").scores
     dev = deviations([scored], expert_paths(scorer, [traj.meta.get("seed", 0)])).get("attempt")
     out["deviation_mm"] = [] if dev is None else [round(float(v), 2) for v in dev]
     out["worst_moments"] = [] if dev is None else worst_moments(dev, float(scored.time[-1]))
@@ -59,6 +67,10 @@ def feedback_text(fb: dict) -> str:
         lines.append(f"learned value gain {s['value']:.2f} = {_pct(n.get('value'))} of the expert's")
     if s.get("value_mean") is not None:
         lines.append(f"mean learned value {s['value_mean']:.2f}")
+    if fb.get("agent"):
+        a = fb["agent"]
+        lines.append(f"trained agent from the same start: {100 * a['subtasks']:.0f}% of subtasks in {a['time']:.1f} s, "
+                     f"{100 * a['path_length']:.1f} cm, heuristic {a['heuristic']:.2f}")
     if fb["worst_moments"]:
         lines.append("largest deviations from the expert's path:")
         lines += [f"  at {m['percent']}% ({m['time_s']:.1f} s): {m['deviation_mm']:.0f} mm"

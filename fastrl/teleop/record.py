@@ -82,8 +82,10 @@ def record(spec: TaskSpec, subject: str, out_dir: Path, run: Path | None = None,
         if display is not None:
             display.message("scoring the attempt ...")
         traj = Trajectory.load(saved)
-        scorer = Scorer(spec, load_networks_of(run) if run is not None else None)
-        fb = attempt_feedback(scorer, traj, Path(out_dir) / f"references-{traj.meta['task_hash']}.json")
+        nets = load_networks_of(run) if run is not None else None
+        scorer = Scorer(spec, nets)
+        fb = attempt_feedback(scorer, traj, Path(out_dir) / f"references-{traj.meta['task_hash']}.json",
+                              policy=nets.policy if nets is not None else None)
         text = feedback_text(fb)
         session.writer.flush(feedback={k: v for k, v in fb.items() if k != "deviation_mm"})
         (saved.with_suffix(".feedback.json")).write_text(json.dumps(fb, indent=2, default=float))
