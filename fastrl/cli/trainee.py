@@ -71,11 +71,14 @@ def replay(
     from ..data.trajectory import Trajectory, TrajectoryError
     from ..spec import SpecError
     from ..teleop.offline import attempt_recording, replay_in_viewer, spec_of_trajectory
+    from ..teleop.record import markdown_feedback
 
     try:
         traj = Trajectory.load(file)
         task_spec = spec_of_trajectory(traj, spec)
-        rrd = attempt_recording(task_spec, traj, output or file.with_suffix(".replay.rrd"))
+        fb = traj.meta.get("feedback")
+        rrd = attempt_recording(task_spec, traj, output or file.with_suffix(".replay.rrd"),
+                                feedback_md=markdown_feedback(fb) if fb else None)
     except (SpecError, TrajectoryError, FileNotFoundError, ValueError) as e:
         exit_with(e)
     out.print(f"rerun: {escape(str(rrd))}")
@@ -102,6 +105,7 @@ def assist_cmd(
     from ..data.trajectory import Trajectory, TrajectoryError
     from ..spec import SpecError
     from ..teleop.offline import attempt_recording, spec_of_run, spec_of_trajectory
+    from ..teleop.record import markdown_feedback
 
     try:
         traj = Trajectory.load(file)
@@ -109,7 +113,10 @@ def assist_cmd(
         problem = foreign_problem(traj, task_spec)
         if problem:
             raise TrajectoryError(f"{file}: {problem}")
-        rrd = attempt_recording(task_spec, traj, output or file.with_suffix(".assist.rrd"), run, every_s=every)
+        fb = traj.meta.get("feedback")
+        text = markdown_feedback(fb) if fb else None
+        rrd = attempt_recording(task_spec, traj, output or file.with_suffix(".assist.rrd"), run, every_s=every,
+                                feedback_md=text)
     except (SpecError, TrajectoryError, FileNotFoundError, ValueError) as e:
         exit_with(e)
     out.print(f"rerun: {escape(str(rrd))}")

@@ -78,7 +78,8 @@ def attempt_recording(spec: TaskSpec, traj: Trajectory, out: Path, run: Path | N
                 points = points[np.isfinite(points).all(axis=1)]
                 uv, front = project_points(points, u.data.cam_xpos[cam], u.data.cam_xmat[cam],
                                            float(u.model.cam_fovy[cam]), u.width, u.height)
-                uvs.append(uv[front] if front.sum() > 1 else None)
+                inside = front & (uv[:, 0] >= 0) & (uv[:, 0] <= u.width) & (uv[:, 1] >= 0) & (uv[:, 1] <= u.height)
+                uvs.append(uv[inside] if inside.sum() > 1 else None)
             suggestions.append((step, sg, *uvs))
 
     ep, _ = replay_episode(env, traj, image_every, on_step)

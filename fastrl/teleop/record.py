@@ -91,7 +91,7 @@ def record(spec: TaskSpec, subject: str, out_dir: Path, run: Path | None = None,
         (saved.with_suffix(".feedback.json")).write_text(json.dumps(fb, indent=2, default=float))
         result["feedback"], result["feedback_text"] = fb, text
         result["rrd"] = attempt_recording(spec, Trajectory.load(saved), saved.with_suffix(".rrd"), run,
-                                          feedback_md=_markdown(text), assistance=assistance)
+                                          feedback_md=markdown_feedback(fb), assistance=assistance)
         say(text)
         if display is not None:
             display.linger(text, linger)
@@ -100,6 +100,6 @@ def record(spec: TaskSpec, subject: str, out_dir: Path, run: Path | None = None,
     return result
 
 
-def _markdown(text: str) -> str:
-    """Feedback text as a markdown list."""
-    return "## Feedback\n\n" + "\n".join(f"- {line.strip()}" for line in text.splitlines())
+def markdown_feedback(fb: dict) -> str:
+    """The feedback as a markdown list (for the Rerun recording)."""
+    return "## Feedback\n\n" + "\n".join(f"- {line.strip()}" for line in feedback_text(fb).splitlines())
