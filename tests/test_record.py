@@ -126,6 +126,12 @@ def test_keystrokes_to_the_real_window_drive_the_scope_and_the_attempt_replays_t
 @pytest.mark.parametrize("how", ["SIGINT", "SIGKILL"])
 def test_an_interrupted_recording_keeps_what_was_recorded(display, tmp_path, how):
     proc = start_record(display, tmp_path, ["--no-feedback", "--set", "episode.time_limit=60"])
+    if how == "SIGINT":  # first pull the scope with the mouse: double-click the shaft, Ctrl + right-drag
+        w = xdotool(display, "search", "--name", "MuJoCo").split()[0]
+        xdotool(display, "windowsize", w, "1280", "800", "windowmove", w, "0", "0", "sleep", "1",
+                "mousemove", "400", "411", "click", "--repeat", "2", "--delay", "80", "1", "sleep", "0.5",
+                "keydown", "ctrl", "mousedown", "3", "sleep", "0.3", "mousemove", "400", "450", "sleep", "0.3",
+                "mousemove", "400", "500", "sleep", "1", "mouseup", "3", "keyup", "ctrl")
     time.sleep(3.0)
     proc.send_signal(getattr(signal, how))
     proc.communicate(timeout=60)
@@ -134,6 +140,7 @@ def test_an_interrupted_recording_keeps_what_was_recorded(display, tmp_path, how
         assert proc.returncode == 0
         assert traj.meta["complete"] and traj.meta["end"] == "interrupted (SIGINT)"
         assert traj.time[-1] >= 2.0
+        assert traj.meta["mouse_ticks"] > 0 and np.ptp(traj.portal[:, 2]) > 0.003  # the pull moved the insertion
     else:  # no chance to save: the last flush, at most a second old, is on disk
         assert not traj.meta["complete"]
         assert traj.time[-1] >= 1.0

@@ -142,6 +142,10 @@ class FastEnv(gym.Env):
             self._renderer = mujoco.Renderer(self.model, self.height, self.width)
         return render_views(self._renderer, self.model, self.data, self.task, outside)
 
+    def hold_here(self) -> None:
+        """Servo targets to the current pose: the scope stays where an outside force (a mouse pull) left it."""
+        self.target = self.portal_coordinates().tolist()
+
     def observation(self) -> np.ndarray:
         """The current observation, without advancing the frame stack."""
         if self.stack == 1:

@@ -35,7 +35,14 @@ class Display:
             for flag in (RND.mjRND_SHADOW, RND.mjRND_REFLECTION, RND.mjRND_SKYBOX):  # software GL: keep frames cheap
                 self.handle.user_scn.flags[flag] = 0  # the viewer copies user_scn's flags into its scene
         self.keys = key_table()
+        m = env.model
+        self.scope_bodies = {i for i in range(m.nbody) if m.body(i).name.startswith("scope")}
         self.footer = ""
+
+    def pulling(self) -> bool:
+        """Whether the mouse is pulling a part of the scope (double-click it, then Ctrl + right-drag)."""
+        p = self.handle.perturb
+        return bool(p.active) and p.select in self.scope_bodies
 
     def lock(self):
         """The viewer's lock: hold it while changing the model or data."""
@@ -132,11 +139,16 @@ class Display:
             time.sleep(0.1)
 
     def close(self) -> None:
-        """Close the window and wait for the GUI thread to let go of GLFW (exiting earlier can crash)."""
-        import time
+        """Close the window."""
+        close_viewer(self.handle)
 
-        self.handle.close()
-        end = time.monotonic() + 5.0
-        while self.handle.is_running() and time.monotonic() < end:
-            time.sleep(0.05)
-        time.sleep(0.3)
+
+def close_viewer(handle) -> None:
+    """Close a passive viewer and wait for its GUI thread to let go of GLFW (exiting earlier can segfault)."""
+    import time
+
+    handle.close()
+    end = time.monotonic() + 5.0
+    while handle.is_running() and time.monotonic() < end:
+        time.sleep(0.05)
+    time.sleep(0.3)

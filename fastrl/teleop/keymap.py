@@ -40,12 +40,15 @@ assert all(DISCRETE_MEANINGS[k.action] for k in KEYS if k.action is not None)
 def key_table() -> tuple[str, str]:
     """The key map as the viewer's two text columns (keys, what they do)."""
     keys = [KEY_NAMES.get(k.name, k.name) for k in KEYS]
-    return ("\n".join(keys + ["mouse", "", "bars", "paths"]),
-            "\n".join([k.label for k in KEYS] + ["drag: turn the 3D view, scroll: zoom", "",
-                                                 "avatar cue | value cue", "magenta: tip, cyan: view centre"]))
+    labels = [k.label for k in KEYS] + ["drag: turn the view; double-click the scope,",
+                                        "then Ctrl + right-drag: pull it", "", "avatar cue | value cue",
+                                        "magenta: tip, cyan: view centre"]
+    return "\n".join(keys + ["mouse", "", "", "bars", "paths"]), "\n".join(labels)
 
 
 def key_markdown() -> str:
     """The key map as a markdown table (the README's)."""
     rows = [f"| {KEY_NAMES.get(k.name, k.name)} | {k.label} |" for k in KEYS]
+    rows += ["| mouse drag / scroll | turn / zoom the 3D view |",
+             "| double-click the scope, then Ctrl + right-drag | pull the scope (the servos follow it) |"]
     return "\n".join(["| key | does |", "|---|---|", *rows])

@@ -57,7 +57,7 @@ class Session:
         if self.assist.run:
             meta["assist_run"] = self.assist.run
         self.writer = AttemptWriter(path, meta)
-        self.periods, self.work, self.skipped_frames = [], [], 0
+        self.periods, self.work, self.skipped_frames, self.pulled_ticks = [], [], 0, 0
 
     # ---- input (called from the viewer's thread) -------------------------------------------
     def on_key(self, code: int) -> None:
@@ -76,8 +76,11 @@ class Session:
         self._cue()
         return info
 
-    def tick(self, now: float | None = None) -> dict:
-        """Apply queued keys, step once, record, and compute what assistance was asked for."""
+    def tick(self, now: float | None = None, pulled: bool = False) -> dict:
+        """Apply queued keys, step once, record, and compute what assistance was asked for.
+
+        `pulled`: the mouse is pulling the scope (viewer perturbation); the servos then follow it.
+        """
         now = time.monotonic() if now is None else now
         with self.lock:
             pending, self.keys = list(self.keys), deque()
@@ -91,6 +94,9 @@ class Session:
                 self.held, self.held_until = key.action, now + self.hold
         action = self.held if now < self.held_until else 0
         _, _, term, trunc, info = self.env.step(action)
+        if pulled:
+            self.env.hold_here()
+            self.pulled_ticks += 1
         self.info = info
         self.infos.append(info)
         self.writer.add(info["time"], self.env.portal_coordinates(), action)
@@ -132,7 +138,7 @@ class Session:
             last = t0
             if display is not None:
                 with display.lock():
-                    self.tick(t0)
+                    self.tick(t0, display.pulling())
                 # draw only if it fits before the next tick (the control rate comes first), at least every 5th tick
                 if t_next + dt - time.monotonic() > show_s or skipped >= 4:
                     t1 = time.monotonic()
@@ -158,7 +164,7 @@ class Session:
     def finish(self, **meta) -> Path | None:
         """Save the complete attempt with why it ended, its cue events and timing."""
         return self.writer.flush(complete=True, end=self.stop, events=cue_events(self.infos),
-                                 realtime=self.timing(), suggestions=self.suggestions,
+                                 realtime=self.timing(), suggestions=self.suggestions, mouse_ticks=self.pulled_ticks,
                                  cue={"kind": self.assist.cue.kind, "lo": self.assist.cue.lo, "hi": self.assist.cue.hi},
                                  **meta)
 
