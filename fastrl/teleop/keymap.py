@@ -1,7 +1,7 @@
 """The key map: GLFW key codes to discrete portal actions and session commands.
 
 Letters are avoided on purpose: the MuJoCo viewer binds most of them to rendering toggles (W wireframe, S
-shadows, T transparency, ...), and it resets the simulation on Backspace.
+shadows, T transparency, ...).
 """
 
 from __future__ import annotations
