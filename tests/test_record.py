@@ -1,5 +1,7 @@
 """Trainee in the loop: the real MuJoCo viewer under Xvfb driven by xdotool keystrokes, saving, assistance."""
 
+import ctypes
+import ctypes.util
 import os
 import shutil
 import signal
@@ -81,6 +83,37 @@ def xdotool(display: str, *args, timeout: float = 20) -> str:
     return res.stdout
 
 
+class XClientMessage(ctypes.Structure):
+    """Xlib's XClientMessageEvent."""
+
+    _fields_ = [("type", ctypes.c_int), ("serial", ctypes.c_ulong), ("send_event", ctypes.c_int),
+                ("display", ctypes.c_void_p), ("window", ctypes.c_ulong), ("message_type", ctypes.c_ulong),
+                ("format", ctypes.c_int), ("l", ctypes.c_long * 5)]
+
+
+class XEvent(ctypes.Union):
+    """Xlib's XEvent (192 bytes)."""
+
+    _fields_ = [("xclient", XClientMessage), ("pad", ctypes.c_long * 24)]
+
+
+def close_window(display: str, window: int) -> None:
+    """What a window manager's close button does: send WM_DELETE_WINDOW (bare Xvfb has no window manager)."""
+    x = ctypes.cdll.LoadLibrary(ctypes.util.find_library("X11"))
+    x.XOpenDisplay.restype = ctypes.c_void_p
+    x.XInternAtom.restype, x.XInternAtom.argtypes = ctypes.c_ulong, [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int]
+    x.XSendEvent.argtypes = [ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int, ctypes.c_long, ctypes.POINTER(XEvent)]
+    x.XFlush.argtypes = x.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    dpy = x.XOpenDisplay(display.encode())
+    ev = XEvent()
+    ev.xclient.type, ev.xclient.window, ev.xclient.format = 33, window, 32  # ClientMessage
+    ev.xclient.message_type = x.XInternAtom(dpy, b"WM_PROTOCOLS", 0)
+    ev.xclient.l[0] = x.XInternAtom(dpy, b"WM_DELETE_WINDOW", 0)
+    x.XSendEvent(dpy, window, 0, 0, ctypes.byref(ev))
+    x.XFlush(dpy)
+    x.XCloseDisplay(dpy)
+
+
 def only_attempt(out: Path) -> Trajectory:
     """The single attempt saved in out."""
     files = [f for f in out.glob("*.npz") if ".partial" not in f.name]
@@ -123,7 +156,7 @@ def test_keystrokes_to_the_real_window_drive_the_scope_and_the_attempt_replays_t
 
 
 @needs_x
-@pytest.mark.parametrize("how", ["SIGINT", "SIGKILL"])
+@pytest.mark.parametrize("how", ["SIGINT", "SIGKILL", "close"])
 def test_an_interrupted_recording_keeps_what_was_recorded(display, tmp_path, how):
     proc = start_record(display, tmp_path, ["--no-feedback", "--set", "episode.time_limit=60"])
     if how == "SIGINT":  # first pull the scope with the mouse: double-click the shaft, Ctrl + right-drag
@@ -133,7 +166,10 @@ def test_an_interrupted_recording_keeps_what_was_recorded(display, tmp_path, how
                 "keydown", "ctrl", "mousedown", "3", "sleep", "0.3", "mousemove", "400", "450", "sleep", "0.3",
                 "mousemove", "400", "500", "sleep", "1", "mouseup", "3", "keyup", "ctrl")
     time.sleep(3.0)
-    proc.send_signal(getattr(signal, how))
+    if how == "close":
+        close_window(display, int(xdotool(display, "search", "--name", "MuJoCo").split()[0]))
+    else:
+        proc.send_signal(getattr(signal, how))
     proc.communicate(timeout=60)
     traj = only_attempt(tmp_path)
     if how == "SIGINT":  # saved in full on the way out
@@ -141,6 +177,8 @@ def test_an_interrupted_recording_keeps_what_was_recorded(display, tmp_path, how
         assert traj.meta["complete"] and traj.meta["end"] == "interrupted (SIGINT)"
         assert traj.time[-1] >= 2.0
         assert traj.meta["mouse_ticks"] > 0 and np.ptp(traj.portal[:, 2]) > 0.003  # the pull moved the insertion
+    elif how == "close":
+        assert proc.returncode == 0 and traj.meta["complete"] and traj.meta["end"] == "window closed"
     else:  # no chance to save: the last flush, at most a second old, is on disk
         assert not traj.meta["complete"]
         assert traj.time[-1] >= 1.0
