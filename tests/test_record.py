@@ -252,3 +252,10 @@ def test_assist_writes_suggestions_and_value_into_rerun_and_feedback_scores_the_
     assert fb["normalised"]["heuristic"] is not None and fb["scores"]["reward"] is not None
     assert fb["agent"]["time"] > 0 and "trained agent" in feedback_text(fb)
     assert 1 <= len(fb["worst_moments"]) <= 3 and "largest deviations" in feedback_text(fb)
+
+
+def test_without_a_display_record_exits_2_with_a_hint(tmp_path, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    res = CliRunner().invoke(app, ["record", str(spec_file("tracelines")), "--subject", "x", "-o", str(tmp_path)])
+    assert res.exit_code == 2 and "xvfb-run" in res.output

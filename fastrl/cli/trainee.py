@@ -17,7 +17,7 @@ RunOpt = Annotated[Path | None, typer.Option("--assist", metavar="RUN_DIR",
 def _no_display(e: Exception) -> None:
     """Exit 2 with a hint when no window can be opened."""
     err.print(f"cannot open the viewer window ({e}); on a machine without a screen run under "
-              "`xvfb-run -a -s '-screen 0 1280x800x24'` with MUJOCO_GL=glfw", markup=False)
+              "`xvfb-run -a -s '-screen 0 1280x800x24'` with MUJOCO_GL=egl", markup=False)
     raise typer.Exit(code=2)
 
 

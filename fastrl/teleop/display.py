@@ -25,6 +25,7 @@ class Display:
 
     def __init__(self, env, on_key, image_px: int = 384):
         self.env, self.image_px = env, image_px
+        check_display()
         self.handle = mujoco.viewer.launch_passive(env.model, env.data, key_callback=on_key,
                                                    show_left_ui=False, show_right_ui=False)
         cam = outside_camera(env.task)
@@ -141,6 +142,18 @@ class Display:
     def close(self) -> None:
         """Close the window."""
         close_viewer(self.handle)
+
+
+def check_display() -> None:
+    """Raise RuntimeError if GLFW cannot start (no display): the viewer would exit the whole process instead."""
+    import warnings
+
+    import glfw
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # glfw warns with the reason; the error below says it
+        if not glfw.init():
+            raise RuntimeError("GLFW cannot open a display (is DISPLAY set?)")
 
 
 def close_viewer(handle) -> None:

@@ -93,8 +93,9 @@ def replay_in_viewer(spec: TaskSpec, traj: Trajectory, speed: float = 1.0, linge
     """Play the attempt back in the MuJoCo viewer in real time (scaled by `speed`); returns samples shown."""
     import mujoco.viewer
 
-    from .display import close_viewer
+    from .display import check_display, close_viewer
 
+    check_display()
     env = FastEnv(spec)
     env.reset(seed=int(traj.meta.get("seed", 0)), options={"portal": traj.portal[0]})
     handle = mujoco.viewer.launch_passive(env.model, env.data, show_left_ui=False, show_right_ui=False)
