@@ -140,7 +140,7 @@ def test_keystrokes_to_the_real_window_drive_the_scope_and_the_attempt_replays_t
     assert traj.portal[:, 0].max() > traj.portal[0, 0] + 0.02   # and the scope pitched (rad)
     assert np.ptp(traj.portal[:, 1]) < 1e-3                     # yaw untouched
     assert np.allclose(np.diff(traj.time), 0.05)                # one sample per control step (20 Hz)
-    assert m["realtime"]["period_ms_mean"] < 60                 # real time at the control rate
+    assert 45 < m["realtime"]["period_ms_mean"] < 75            # paced at the control rate (timing: bench, README)
     _, infos, _ = replay(FastEnv(spec), traj)
     assert len(m["events"]) >= 2 and cue_events(infos) == m["events"]
     fb = m["feedback"]  # scored when it ended; the same in the file, beside it, and in its Rerun recording
