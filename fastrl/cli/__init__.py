@@ -356,4 +356,4 @@ def runs_(root: RunsOpt = Path("runs"),
 
 
 # commands in their own modules register themselves on `app`
-from . import cohort, poses, score  # noqa: E402,F401
+from . import cohort, poses, score, trainee  # noqa: E402,F401

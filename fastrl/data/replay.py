@@ -9,6 +9,7 @@ import numpy as np
 from ..agents.expert import ScriptedExpert
 from ..irl.fitting import Transitions
 from ..spec import spec_hash, task_hash
+from .episode import EpisodeRecord
 from .trajectory import Trajectory
 
 
@@ -93,3 +94,56 @@ def expert_transitions(env, trajectories: list[Trajectory]) -> Transitions:
         term.append(t)
         acts.append(actions)
     return Transitions(np.concatenate(obs), np.concatenate(nxt), np.concatenate(term), np.concatenate(acts))
+
+
+def cue_events(infos: list[dict]) -> list[list]:
+    """[step, kind, value] when the cue turns green or back ("green", bool) or a subtask completes ("subtask", n)."""
+    events, green, subtask = [], None, None
+    for step, info in enumerate(infos):
+        if info["subtask"] != subtask:
+            if subtask is not None:
+                events.append([step, "subtask", int(info["subtask"])])
+            subtask = info["subtask"]
+        if bool(info["cue"]["green"]) != green:
+            green = bool(info["cue"]["green"])
+            events.append([step, "green", green])
+    return events
+
+
+def replay_episode(env, traj: Trajectory, image_every: int = 0,
+                   on_step: Callable | None = None) -> tuple[EpisodeRecord, np.ndarray]:
+    """A trajectory replayed as an EpisodeRecord (and its observations); `on_step(step, env)` sees each state."""
+    u = env.unwrapped
+    obs, info = u.reset(seed=int(traj.meta.get("seed", 0)), options={"portal": traj.portal[0]})
+    shaft = u.model.body("scope_shaft").id
+    length = u.task_spec.scope.shaft_length
+    rows, images, observations = [], {}, []
+
+    def snapshot(reward: float, info: dict, obs) -> None:
+        s = u.state
+        axis = u.data.xmat[shaft].reshape(3, 3)[:, 2]
+        rows.append((s.time, s.portal, s.tip_pos, s.tip_quat, u.data.xpos[shaft] - length * axis, reward,
+                     list(info["features"].values()), info["subtask"], info["cue"]["green"], info["contacts"]))
+        observations.append(obs)
+        step = len(rows) - 1
+        if image_every and step % image_every == 0:
+            images[step] = u.render()
+        if on_step is not None:
+            on_step(step, u)
+
+    snapshot(0.0, info, obs)
+    for q in traj.portal[1:]:
+        obs, reward, term, _, info = u.replay_step(q)
+        snapshot(float(reward), info, obs)
+        if term:
+            break
+    cols = list(zip(*rows))
+    names = u.feature_names
+    feats = np.array(cols[6], float).reshape(len(rows), len(names))
+    ep = EpisodeRecord(
+        seed=int(traj.meta.get("seed", 0)), time=np.array(cols[0]), portal=np.array(cols[1]),
+        tip_pos=np.array(cols[2]), tip_quat=np.array(cols[3]), shaft_end=np.array(cols[4]), reward=np.array(cols[5]),
+        features={n: feats[:, i] for i, n in enumerate(names)}, subtask=np.array(cols[7]),
+        green=np.array(cols[8], bool), contacts=np.array(cols[9]), actions=traj.actions, images=images,
+        subtasks_total=info["subtasks_total"], success=bool(info["success"]))
+    return ep, np.array(observations)

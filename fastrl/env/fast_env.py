@@ -148,6 +148,30 @@ class FastEnv(gym.Env):
             self._renderer = mujoco.Renderer(self.model, self.height, self.width)
         return render_views(self._renderer, self.model, self.data, self.task, outside)
 
+    def hold_here(self) -> None:
+        """Servo targets to the current pose: the scope stays where an outside force (a mouse pull) left it."""
+        self.target = self.portal_coordinates().tolist()
+
+    def observation(self) -> np.ndarray:
+        """The current observation, without advancing the frame stack."""
+        if self.stack == 1:
+            return self._observe()
+        return self._frames.reshape(-1).copy()
+
+    def copy_state_from(self, other: FastEnv) -> None:
+        """Continue from another env of the same task: physics, servo targets, cue state, avatars, frames."""
+        mujoco.mj_copyData(self.data, self.model, other.data)
+        for name in TaskState.__slots__:
+            setattr(self.state, name, getattr(other.state, name))
+        self.steps, self.done_count, self.elapsed = other.steps, other.done_count, other.elapsed
+        self.target = list(other.target)
+        self._positions_only = other._positions_only
+        self._frames[:] = other._frames
+        for name in ("t_pos", "t_fwd", "t_up", "t_quat"):
+            getattr(self, name)[:] = getattr(other, name)
+        if hasattr(other.actions, "twist"):
+            self.actions.twist[:] = other.actions.twist
+
     @property
     def subtask(self) -> int:
         """Subtasks completed so far."""
