@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..data.replay import replay
-from ..data.trajectory import Trajectory
+from ..data.trajectory import Trajectory, TrajectoryError
 from ..env.fast_env import FastEnv
 from ..model.kinematics import Kinematics
 from ..spec import task_hash
@@ -98,8 +98,6 @@ class Scorer:
 
     def score_file(self, path: Path) -> TrajectoryScores:
         """Load, check and score one file; TrajectoryError or ValueError name the file and the problem."""
-        from ..data.trajectory import TrajectoryError
-
         traj = Trajectory.load(path)
         problem = foreign_problem(traj, self.spec)
         if problem:
