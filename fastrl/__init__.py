@@ -13,7 +13,8 @@ import gymnasium  # noqa: E402
 __version__ = "0.1.0"
 
 SPECS_DIR = Path(__file__).resolve().parent.parent / "specs"
-TASK_IDS = {"ImageCentring": "imagecentring", "Periscoping": "periscoping", "TraceLines": "tracelines"}
+TASK_IDS = {"ImageCentring": "imagecentring", "Periscoping": "periscoping", "TraceLines": "tracelines",
+            "LiverTour": "liver_tour"}
 
 
 def spec_path(name: str) -> Path:

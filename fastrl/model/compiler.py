@@ -9,12 +9,13 @@ import mujoco
 import numpy as np
 
 from ..spec.models import TaskSpec
+from .abdomen import build_abdomen
 from .dome import build_dome
 from .scope import JOINTS, build_scope, joint_ranges
 from .targets import Targets, build_targets, resolve_targets
 
 SceneBuilder = Callable[[mujoco.MjSpec, object], dict]
-SCENES: dict[str, SceneBuilder] = {"fast_dome": build_dome}
+SCENES: dict[str, SceneBuilder] = {"fast_dome": build_dome, "abdomen": build_abdomen}
 
 
 def register_scene(kind: str, builder: SceneBuilder) -> None:

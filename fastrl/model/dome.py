@@ -19,10 +19,17 @@ SHELL_GROUP = 2  # hidden in the outside view
 
 def build_dome(spec: mujoco.MjSpec, scene: DomeScene) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Add plate, shell tiles and portal rims to the world; return {portal: (point, rotation)}."""
+    r = scene.radius
+    spec.worldbody.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[r + 0.03, 0.005],
+                            pos=[0, 0, -0.005], rgba=PLATE_RGBA, contype=WORLD_CONTYPE,
+                            conaffinity=WORLD_CONAFFINITY)
+    return add_shell(spec, scene, SHELL_RGBA, PORTAL_RGBA)
+
+
+def add_shell(spec: mujoco.MjSpec, scene, shell_rgba, portal_rgba) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """A hemispherical shell of tiles with holes at the scene's portals, and a rim per portal."""
     world = spec.worldbody
     r, t = scene.radius, scene.thickness
-    world.add_geom(name="plate", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[r + 0.03, 0.005],
-                   pos=[0, 0, -0.005], rgba=PLATE_RGBA, contype=WORLD_CONTYPE, conaffinity=WORLD_CONAFFINITY)
     portals = {p.name: geo.portal_frame(r, p.azimuth, p.elevation, p.aim) for p in scene.portals}
     holes = [(geo.sphere_point(1.0, p.azimuth, p.elevation), p.radius / r) for p in scene.portals]
     d_el = math.radians(90.0 / (scene.rings + 0.5))
@@ -40,17 +47,17 @@ def build_dome(spec: mujoco.MjSpec, scene: DomeScene) -> dict[str, tuple[np.ndar
             rot = np.column_stack([e_az, np.cross(normal, e_az), normal])
             half = [0.53 * (r + t) * d_az * math.cos(el0), 0.53 * (r + t) * d_el, 0.5 * t]
             world.add_geom(name=f"shell_{k}_{j}", type=mujoco.mjtGeom.mjGEOM_BOX, size=half,
-                           pos=(r + 0.5 * t) * normal, quat=geo.mat_to_quat(rot), rgba=SHELL_RGBA,
+                           pos=(r + 0.5 * t) * normal, quat=geo.mat_to_quat(rot), rgba=shell_rgba,
                            group=SHELL_GROUP, contype=WORLD_CONTYPE, conaffinity=WORLD_CONAFFINITY)
     el_cap = scene.rings * d_el
     world.add_geom(name="shell_crown", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
                    size=[(r + t) * math.cos(el_cap) * 1.05, 0.5 * t],
                    pos=[0, 0, r * math.sin(el_cap) + 0.5 * t + r * (1 - math.sin(el_cap)) * 0.5],
-                   rgba=SHELL_RGBA, group=SHELL_GROUP, contype=WORLD_CONTYPE, conaffinity=WORLD_CONAFFINITY)
+                   rgba=shell_rgba, group=SHELL_GROUP, contype=WORLD_CONTYPE, conaffinity=WORLD_CONAFFINITY)
     for name, (point, _) in portals.items():
         normal = point / np.linalg.norm(point)
         world.add_geom(name=f"portal_{name}", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
                        size=[1.4 * next(p.radius for p in scene.portals if p.name == name), 0.3 * t],
                        pos=point + (t + 0.3 * t) * normal, quat=geo.mat_to_quat(geo.frame_from_z(normal)),
-                       rgba=PORTAL_RGBA, group=SHELL_GROUP, contype=0, conaffinity=0)
+                       rgba=portal_rgba, group=SHELL_GROUP, contype=0, conaffinity=0)
     return portals

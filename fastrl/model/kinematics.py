@@ -33,7 +33,7 @@ def view_residuals(pos, rot, target, fwd_t, up_t, dist_mid, dist_span) -> np.nda
     """Centring (2 angles), horizon (signed angle) and distance error of a camera pose on a target."""
     d = target - pos
     local = rot.T @ d  # x right, y up, z backward
-    ahead = max(-local[2], 1e-6)
+    ahead = -local[2]  # negative when the target is behind: the angles then exceed 90 degrees
     x_img, y_img = up_t @ rot[:, 0], up_t @ rot[:, 1]
     return np.array([math.atan2(local[0], ahead), math.atan2(local[1], ahead), math.atan2(x_img, y_img),
                      (np.linalg.norm(d) - dist_mid) / dist_span])
@@ -58,9 +58,14 @@ def solve_view(kin: Kinematics, k: int, q0: np.ndarray, target=None, pivot_weigh
         return np.concatenate([r, inside, reg * (q - q0)])
 
     best = None
-    for dcable in (0.0, math.pi / 2, -math.pi / 2, math.pi):
+    retracted = lo[2] + 0.15 * (hi[2] - lo[2])  # a target behind the camera is ahead again once retracted
+    starts = [(dc, None) for dc in (0.0, math.pi / 2, -math.pi / 2, math.pi)] + [(0.0, retracted),
+                                                                                   (math.pi, retracted)]
+    for dcable, insertion in starts:
         start = np.clip(q0 + np.array([0, 0, 0, 0, dcable]), lo + 1e-6, hi - 1e-6)
         start[4] = (start[4] + math.pi) % (2 * math.pi) - math.pi
+        if insertion is not None:
+            start[2] = insertion
         sol = least_squares(residuals, start, bounds=(lo, hi), xtol=1e-8, ftol=1e-8, max_nfev=200)
         if best is None or sol.cost < best.cost:
             best = sol

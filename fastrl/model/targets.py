@@ -9,6 +9,7 @@ import numpy as np
 
 from ..spec import geometry as geo
 from ..spec.models import Avatar, Cue, TaskSpec
+from .anatomy import landmark_pose
 
 LINE_RGBA = (0.1, 0.25, 0.7, 1.0)
 AVATAR_GROUP = 1
@@ -50,6 +51,8 @@ def task_avatars(task_spec: TaskSpec) -> tuple[list[Avatar], np.ndarray | None]:
 
 def resolve_targets(task_spec: TaskSpec) -> Targets:
     """Target poses and tolerances of every subtask of the spec."""
+    if task_spec.task.landmarks:
+        return landmark_targets(task_spec)
     avatars, line = task_avatars(task_spec)
     r = task_spec.scene.radius
     poses = [geo.avatar_pose(r, a.surface, a.at, a.heading_deg) for a in avatars]
@@ -62,6 +65,22 @@ def resolve_targets(task_spec: TaskSpec) -> Targets:
         centring=np.radians([c.centring_deg for c in cues]), horizon=np.radians([c.horizon_deg for c in cues]),
         dist=np.array([c.distance for c in cues], float), dwell=np.array([c.dwell for c in cues], float),
         size=0.003 if line is not None else 0.006, line=line)
+
+
+def landmark_targets(task_spec: TaskSpec) -> Targets:
+    """Targets of a tour: each landmark's organ point facing the portal, fixed (no jitter)."""
+    marks = task_spec.task.landmarks
+    portal = task_spec.portal_point()
+    poses = [landmark_pose(task_spec.scene.anatomy[m.organ], portal) for m in marks]
+    cues = [m.cue or task_spec.task.cue for m in marks]
+    pos, fwd, up = (np.array([p[k] for p in poses]) for k in range(3))
+    n = len(marks)
+    return Targets(
+        pos=pos, fwd=fwd, up=up, quat=np.array([geo.mat_to_quat(geo.avatar_rotation(f, u)) for f, u in zip(fwd, up)]),
+        on_plate=np.zeros(n, bool), at=np.zeros((n, 2)), heading=np.zeros(n),
+        centring=np.radians([c.centring_deg for c in cues]), horizon=np.radians([c.horizon_deg for c in cues]),
+        dist=np.array([c.distance for c in cues], float), dwell=np.array([c.dwell for c in cues], float),
+        size=0.004, line=None)
 
 
 def build_targets(spec: mujoco.MjSpec, targets: Targets, line_width: float = 0.0015) -> list[tuple[str, str]]:

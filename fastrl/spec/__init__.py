@@ -2,6 +2,7 @@
 
 import hashlib
 import json
+from pathlib import Path
 
 from .loader import SpecError, SpecIssue, apply_overrides, load_model, read_yaml
 from .models import Avatar, Cue, DomeScene, Line, Portal, Scope, Task, TaskSpec
@@ -9,7 +10,7 @@ from .models import Avatar, Cue, DomeScene, Line, Portal, Scope, Task, TaskSpec
 
 def load_spec(path, overrides=()) -> TaskSpec:
     """Load and validate a task spec YAML; raises SpecError listing every problem."""
-    return load_model(path, TaskSpec, list(overrides))
+    return load_model(path, TaskSpec, list(overrides), context={"base": Path(path).resolve().parent})
 
 
 def spec_hash(spec: TaskSpec) -> str:

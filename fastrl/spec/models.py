@@ -69,7 +69,80 @@ class DomeScene(Strict):
         return v
 
 
-Scene = Annotated[DomeScene, Field(discriminator="kind")]
+class Organ(Strict):
+    """One piece of anatomy: a parametric ellipsoid, or a mesh file (OBJ or STL, metres, world frame)."""
+
+    centre: tuple[float, float, float] = Field((0.0, 0.0, 0.03), description="ellipsoid centre (m)")
+    size: tuple[Pos, Pos, Pos] = Field((0.03, 0.03, 0.02), description="ellipsoid semi-axes (m)")
+    bumps: NonNeg = Field(0.0, le=0.5, description="relative amplitude of a wavy surface (bowel loops)")
+    mesh: str | None = Field(None, description="OBJ or STL file, relative to the spec file; replaces the ellipsoid")
+    scale: Pos = Field(1.0, description="mesh file units to metres")
+    rgba: tuple[float, float, float, float] = (0.55, 0.2, 0.15, 1.0)
+
+    @field_validator("mesh")
+    @classmethod
+    def _resolve(cls, v, info):
+        base = (info.context or {}).get("base")
+        if v is None or base is None:
+            return v
+        return str((base / v).resolve()) if not v.startswith("/") else v
+
+
+def _default_anatomy() -> dict[str, Organ]:
+    """Liver lobes, falciform ligament, gallbladder and bowel of an insufflated abdomen (x cranial, y left)."""
+    return {
+        "right_lobe": Organ(centre=(0.075, -0.045, 0.035), size=(0.05, 0.06, 0.035), rgba=(0.5, 0.16, 0.12, 1)),
+        "left_lobe": Organ(centre=(0.07, 0.05, 0.03), size=(0.04, 0.045, 0.024), rgba=(0.55, 0.19, 0.14, 1)),
+        "falciform": Organ(centre=(0.055, 0.0, 0.09), size=(0.04, 0.002, 0.035), rgba=(0.9, 0.82, 0.6, 1)),
+        "gallbladder": Organ(centre=(0.03, -0.065, 0.02), size=(0.025, 0.012, 0.012), rgba=(0.3, 0.5, 0.2, 1)),
+        "bowel": Organ(centre=(-0.045, 0.0, 0.021), size=(0.075, 0.1, 0.02), bumps=0.25,
+                       rgba=(0.85, 0.55, 0.5, 1)),
+    }
+
+
+class AbdomenScene(Strict):
+    """An insufflated abdomen: the abdominal wall as a dome over the posterior wall, with anatomy inside."""
+
+    kind: Literal["abdomen"]
+    radius: float = Field(0.15, ge=0.05, le=0.5, description="inner radius of the abdominal wall (m)")
+    thickness: float = Field(0.01, gt=0, le=0.05, description="wall thickness (m)")
+    rings: int = Field(7, ge=3, le=40, description="wall tiles from flank to top")
+    sectors: int = Field(18, ge=6, le=96, description="wall tiles around")
+    portals: list[Portal] = Field(min_length=1, description="trocars through the wall")
+    anatomy: dict[str, Organ] = Field(default_factory=_default_anatomy, min_length=1)
+
+    @field_validator("portals")
+    @classmethod
+    def _unique(cls, v):
+        names = [p.name for p in v]
+        if len(set(names)) != len(names):
+            raise ValueError(f"portal names must be unique, got {names}")
+        return v
+
+    @model_validator(mode="after")
+    def _inside(self):
+        from ..model.anatomy import MeshError, organ_vertices
+
+        errors = []
+        for name, organ in self.anatomy.items():
+            field = "mesh" if organ.mesh else "size"
+            try:
+                verts = organ_vertices(organ)
+            except MeshError as e:
+                errors.append((("anatomy", name, "mesh"), str(e), organ.mesh))
+                continue
+            out = np.linalg.norm(verts, axis=1) > self.radius + 1e-6
+            low = verts[:, 2] < -1e-6
+            if out.any() or low.any():
+                far = float(np.linalg.norm(verts, axis=1).max())
+                where = (f"reaches {far:.3f} m from the centre, past the wall at {self.radius:.3f} m" if out.any()
+                         else f"goes {-verts[:, 2].min():.3f} m below the posterior wall (z = 0)")
+                errors.append((("anatomy", name, field), f"{name} is outside the cavity: it {where}", organ.mesh))
+        _raise(errors)
+        return self
+
+
+Scene = Annotated[DomeScene | AbdomenScene, Field(discriminator="kind")]
 
 
 class StartPose(Strict):
@@ -146,12 +219,20 @@ class Line(Strict):
     heading_deg: float = 90.0
 
 
-class Task(Strict):
-    """Which FAST task, its avatars or line, and the default cue."""
+class Landmark(Strict):
+    """An anatomical landmark to visualise: the point of an organ that faces the portal."""
 
-    kind: Literal["image_centring", "periscoping", "trace_lines"]
+    organ: str = Field(description="a name from scene.anatomy")
+    cue: Cue | None = None
+
+
+class Task(Strict):
+    """Which task, its avatars, line or landmarks, and the default cue."""
+
+    kind: Literal["image_centring", "periscoping", "trace_lines", "liver_tour"]
     avatars: list[Avatar] = []
     line: Line | None = None
+    landmarks: list[Landmark] = []
     cue: Cue = Cue()
     jitter: tuple[NonNeg, NonNeg] = Field(
         (0.0, 0.0), description="random avatar offset at reset: metres on the plate, degrees on the dome")
@@ -160,7 +241,12 @@ class Task(Strict):
     def _targets(self):
         if self.kind == "trace_lines" and self.line is None:
             raise ValueError("trace_lines needs a 'line'")
-        if self.kind != "trace_lines" and not self.avatars:
+        if self.kind == "liver_tour":
+            if not self.landmarks:
+                raise ValueError("liver_tour needs at least one landmark")
+            if self.avatars or self.line is not None or any(self.jitter):
+                raise ValueError("liver_tour has landmarks fixed to the anatomy: no avatars, line or jitter")
+        elif self.kind != "trace_lines" and not self.avatars:
             raise ValueError(f"{self.kind} needs at least one avatar")
         return self
 
@@ -196,6 +282,8 @@ class Actions(Strict):
 class Observation(Strict):
     """The paper's state, with options; `extra` adds registered terms by name."""
 
+    state: Literal["full", "camera_position"] = Field(
+        "full", description="camera_position: the state is the camera position in R^3 only (the liver tour)")
     velocities: bool = True
     goal: bool = True
     egocentric: bool = False
@@ -210,6 +298,8 @@ class Observation(Strict):
 
     def terms(self) -> list[str]:
         """Observation term names in order."""
+        if self.state == "camera_position":
+            return ["camera_position"] + [n for n in self.extra if n != "camera_position"]
         names = ["tip_pos", "tip_quat"]
         names += ["tip_vel", "tip_quat_rate"] if self.velocities else []
         names += ["target_pos", "target_quat"] if self.goal else []
@@ -272,10 +362,25 @@ class TaskSpec(Strict):
         if self.scope.portal not in names:
             _fail("scope.portal", f"no portal named '{self.scope.portal}' (portals: {', '.join(names)})")
         errors = []
+        anatomy = getattr(self.scene, "anatomy", {})
+        if self.task.kind == "liver_tour" and self.scene.kind != "abdomen":
+            errors.append((("task", "kind"), "liver_tour needs scene.kind: abdomen", self.task.kind))
+        for i, lm in enumerate(self.task.landmarks):
+            if lm.organ not in anatomy:
+                errors.append((("task", "landmarks", i, "organ"),
+                               f"no organ named '{lm.organ}' (anatomy: {', '.join(anatomy) or 'none'})", lm.organ))
+        _raise(errors)
         for i, av in enumerate(self.task.avatars):
             problem = self.avatar_problem(av)
             if problem:
                 errors.append((("task", "avatars", i, "at"), problem, list(av.at)))
+        for i, lm in enumerate(self.task.landmarks):
+            from ..model.anatomy import landmark_pose
+
+            pos, _, _ = landmark_pose(anatomy[lm.organ], self.portal_point())
+            problem = self.reach_problem(pos, lm.cue or self.task.cue)
+            if problem:
+                errors.append((("task", "landmarks", i, "organ"), problem, lm.organ))
         if self.task.line is not None:
             for i, xy in enumerate(self.task.line.points):
                 problem = self.avatar_problem(Avatar(surface="plate", at=xy))
@@ -300,9 +405,18 @@ class TaskSpec(Strict):
                     f"the centre, the plate inside the shell ends at {r - 0.01:.3f} m")
         if av.surface == "dome" and not 5.0 <= av.at[1] <= 88.0:
             return f"target elevation {av.at[1]} deg is outside the dome's inner surface (5 to 88 deg)"
-        pos, fwd, _ = geo.avatar_pose(r, av.surface, av.at, av.heading_deg)
+        pos, _, _ = geo.avatar_pose(r, av.surface, av.at, av.heading_deg)
+        return self.reach_problem(pos, self.cue_for(av))
+
+    def portal_point(self) -> np.ndarray:
+        """Where the scope's portal is (m)."""
         p = self.portal()
-        point, rot = geo.portal_frame(r, p.azimuth, p.elevation, p.aim)
+        return geo.portal_frame(self.scene.radius, p.azimuth, p.elevation, p.aim)[0]
+
+    def reach_problem(self, pos: np.ndarray, cue: Cue) -> str | None:
+        """Why the scope cannot view a target at `pos` under `cue`, or None."""
+        p = self.portal()
+        point, rot = geo.portal_frame(self.scene.radius, p.azimuth, p.elevation, p.aim)
         d = pos - point
         dist = float(np.linalg.norm(d))
         off = math.degrees(math.acos(np.clip(d @ rot[:, 2] / dist, -1, 1)))
@@ -310,7 +424,6 @@ class TaskSpec(Strict):
         if off > reach:
             return (f"portal '{p.name}' cannot reach this target: it lies {off:.0f} deg off the portal axis, "
                     f"the scope reaches {reach:.0f} deg (pivot limit + optics angle)")
-        cue = self.cue_for(av)
         far = self.scope.insertion[1] + 0.5 * (cue.distance[0] + cue.distance[1])
         if dist > far:
             return (f"portal '{p.name}' cannot reach this target: it is {dist:.3f} m away, the scope holds it "

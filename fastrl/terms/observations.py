@@ -17,6 +17,12 @@ def tip_pos(s: TaskState) -> tuple:
     return s.tip_pos
 
 
+@term(size=3)
+def camera_position(s: TaskState) -> tuple:
+    """Endoscope camera position in the world (m): the liver tour's whole state."""
+    return s.cam_pos
+
+
 @term(size=4)
 def tip_quat(s: TaskState) -> tuple:
     """Camera orientation quaternion (w, x, y, z)."""
