@@ -12,6 +12,7 @@ from .ranking import rank_correlations, subject_table
 from .scoring import HIGHER_IS_BETTER, NORMALISED, Scorer, TrajectoryScores
 
 COLUMNS = ("heuristic", "reward", "value", "subtasks", "path_length", "time", "smoothness")
+TOUR_COLUMNS = ("economy", "safety", "contacts")  # abdomen scenes only
 
 
 def trajectory_files(paths: Iterable[Path]) -> list[Path]:
@@ -41,7 +42,7 @@ def row(s: TrajectoryScores) -> dict:
     """One flat row: normalised learned and heuristic scores, raw kinematic ones, and the labels."""
     out = {"file": s.name, "subject": s.subject, "skill": s.skill, "source": s.meta.get("source"),
            "success": s.meta.get("success")}
-    for k in COLUMNS:
+    for k in COLUMNS + tuple(k for k in TOUR_COLUMNS if k in s.scores):
         normalised = s.normalised.get(k)
         out[k] = normalised if k in NORMALISED and normalised is not None else s.scores.get(k)
         if k in NORMALISED:
@@ -61,6 +62,7 @@ def build_report(scored: list[TrajectoryScores], references: dict, problems: lis
     """Everything a reader or a machine needs: references, rows, groups, rankings, problems."""
     rows = [row(s) for s in scored]
     keys = tuple(k for k in COLUMNS if learned or k not in ("reward", "value"))
+    keys += tuple(k for k in TOUR_COLUMNS if rows and k in rows[0])
     by = group_key(rows) if rows else "subject"
     grouped = [{**r, "subject": f"level {r['skill']}" if by == "skill" else r["subject"]} for r in rows]
     warnings = [f"{k}: the random policy scores above the scripted expert ({references['random'][k]:.4g} vs "

@@ -14,11 +14,12 @@ from ..model.kinematics import Kinematics
 from ..spec import task_hash
 from ..spec.models import TaskSpec
 from .kinematic import log_dimensionless_jerk, path_length
+from .tour import tour_metrics
 
 SCORES = ("heuristic", "reward", "value", "subtasks", "path_length", "time", "smoothness")
 NORMALISED = ("heuristic", "reward", "value")  # 0 = random policy, 1 = scripted expert
 HIGHER_IS_BETTER = {"heuristic": True, "reward": True, "value": True, "subtasks": True, "path_length": False,
-                    "time": False, "smoothness": True}
+                    "time": False, "smoothness": True, "economy": False, "safety": True, "contacts": False}
 
 
 @dataclass
@@ -67,6 +68,13 @@ class Scorer:
         self.env = FastEnv(spec)
         self.kin = Kinematics(self.env.task)
         self.learned = networks is not None and networks.kind is not None
+        self.anatomy = None
+        if spec.scene.kind == "abdomen":
+            from scipy.spatial import cKDTree
+
+            from ..model.anatomy import anatomy_vertices
+
+            self.anatomy = cKDTree(anatomy_vertices(spec.scene))
 
     def tip_path(self, portal: np.ndarray) -> np.ndarray:
         """Camera positions along portal coordinates (forward kinematics on a scratch copy)."""
@@ -87,6 +95,8 @@ class Scorer:
             "smoothness": log_dimensionless_jerk(tip, time),
             "reward": None, "value": None,
         }
+        if self.anatomy is not None:
+            scores.update(tour_metrics(tip, [i["contacts"] for i in infos], self.anatomy, self.spec.scene.radius))
         values = None
         if self.learned:
             scores["reward"] = float(self.networks.reward(obs).sum())

@@ -1,4 +1,4 @@
-"""The static 3D scene of a compiled task: dome shell, plate, portals, avatars, line."""
+"""The static 3D scene of a compiled task: dome or abdominal wall, plate, portals, anatomy, avatars, line."""
 
 from __future__ import annotations
 
@@ -6,6 +6,8 @@ import numpy as np
 import rerun as rr
 
 from ..model.compiler import CompiledTask
+from ..model.abdomen import FLOOR_RGBA, TROCAR_RGBA, WALL_RGBA
+from ..model.anatomy import organ_mesh
 from ..model.dome import PLATE_RGBA, PORTAL_RGBA, SHELL_RGBA
 from ..model.targets import LINE_RGBA
 from ..spec import geometry as geo
@@ -22,6 +24,9 @@ def log_scene(rec: rr.RecordingStream, task: CompiledTask, root: str = "world") 
     base = f"{root}/scene"
     if getattr(scene, "kind", None) == "fast_dome":
         _log_dome(rec, base, scene, task.spec.scope.portal)
+    elif getattr(scene, "kind", None) == "abdomen":
+        _log_dome(rec, base, scene, task.spec.scope.portal, WALL_RGBA, FLOOR_RGBA, TROCAR_RGBA)
+        _log_anatomy(rec, base, scene)
     _log_targets(rec, base, task)
 
 
@@ -35,7 +40,16 @@ def default_eye(task: CompiledTask) -> tuple[tuple, tuple]:
     return tuple(position), (0.0, 0.0, 0.1 * r)
 
 
-def _log_dome(rec: rr.RecordingStream, base: str, scene, scope_portal: str) -> None:
+def _log_anatomy(rec: rr.RecordingStream, base: str, scene) -> None:
+    """Each organ's mesh in its colour, named by its entity path."""
+    for name, organ in scene.anatomy.items():
+        verts, faces = organ_mesh(organ)
+        rec.log(f"{base}/anatomy/{name}", rr.Mesh3D(vertex_positions=verts, triangle_indices=faces.astype(np.uint32),
+                                                   albedo_factor=rgba(organ.rgba)), static=True)
+
+
+def _log_dome(rec: rr.RecordingStream, base: str, scene, scope_portal: str, shell_rgba=SHELL_RGBA,
+              plate_rgba=PLATE_RGBA, portal_rgba=PORTAL_RGBA) -> None:
     """Shell with holes at the portals, base plate, and a labelled ring per portal."""
     r = scene.radius
     holes = [
@@ -49,7 +63,7 @@ def _log_dome(rec: rr.RecordingStream, base: str, scene, scope_portal: str) -> N
             vertex_positions=verts,
             vertex_normals=normals,
             triangle_indices=tris,
-            albedo_factor=rgba(SHELL_RGBA, SHELL_ALPHA),
+            albedo_factor=rgba(shell_rgba, SHELL_ALPHA),
             face_rendering=rr.components.MeshFaceRendering.Back,
         ),
         static=True,
@@ -57,7 +71,7 @@ def _log_dome(rec: rr.RecordingStream, base: str, scene, scope_portal: str) -> N
     rim = ring(np.zeros(3), np.array([0.0, 0.0, 1.0]), r + scene.thickness, n=96)
     rec.log(
         f"{base}/shell/rim",
-        rr.LineStrips3D([rim], radii=0.0008, colors=rgba(SHELL_RGBA) // 2 + 64),
+        rr.LineStrips3D([rim], radii=0.0008, colors=rgba(shell_rgba) // 2 + 64),
         static=True,
     )
     pv, pt = disk(r + 0.03, z=-0.0003)
@@ -66,7 +80,7 @@ def _log_dome(rec: rr.RecordingStream, base: str, scene, scope_portal: str) -> N
         rr.Mesh3D(
             vertex_positions=pv,
             triangle_indices=pt,
-            albedo_factor=rgba(PLATE_RGBA),
+            albedo_factor=rgba(plate_rgba),
             vertex_normals=np.tile([0.0, 0.0, 1.0], (len(pv), 1)),
         ),
         static=True,
@@ -79,7 +93,7 @@ def _log_dome(rec: rr.RecordingStream, base: str, scene, scope_portal: str) -> N
     rec.log(
         f"{base}/portals",
         rr.LineStrips3D(
-            strips, radii=0.0012, colors=rgba(PORTAL_RGBA), labels=labels, show_labels=True
+            strips, radii=0.0012, colors=rgba(portal_rgba), labels=labels, show_labels=True
         ),
         static=True,
     )

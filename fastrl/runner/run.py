@@ -40,11 +40,14 @@ class EvaluationInterrupted(Exception):
         self.run = run
 
 
-def start_run(spec_path, overrides=(), root="runs", console: Console | None = None, progress: bool = True) -> Path:
-    """Train, evaluate and record a new run of a spec file; return its directory."""
+def start_run(spec_path, overrides=(), root="runs", console: Console | None = None, progress: bool = True,
+              into: Path | None = None) -> Path:
+    """Train, evaluate and record a new run of a spec file (in `into` if given); return its directory."""
     spec = load_spec(spec_path, overrides)
     task = compile_task(spec)
-    run = new_run_dir(Path(root), spec)
+    if into is not None:
+        Path(into).mkdir(parents=True, exist_ok=False)
+    run = Path(into) if into is not None else new_run_dir(Path(root), spec)
     write_spec(run, spec, task.xml)
     write_meta(run, spec, str(spec_path), {"status": "training", "overrides": list(overrides)})
     return _train_and_evaluate(run, spec, task, None, console or Console(), progress)

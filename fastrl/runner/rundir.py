@@ -18,12 +18,13 @@ from ..spec.models import TaskSpec
 PACKAGES = ("fastrl", "mujoco", "gymnasium", "stable-baselines3", "torch", "numpy", "pydantic", "rerun-sdk")
 
 
-def new_run_dir(root: Path, spec: TaskSpec) -> Path:
-    """runs/<spec name>/<UTC timestamp>-<algo>-s<seed>/ (algo e.g. ppo, airl-ppo, bc), made unique if it exists."""
+def new_run_dir(root: Path, spec: TaskSpec, label: str | None = None) -> Path:
+    """runs/<spec name>/<UTC timestamp>-<algo>-s<seed>/ (algo e.g. ppo, airl-ppo, bc) or <timestamp>-<label>/,
+    made unique if it exists."""
     stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
     algo = spec.train.algo.lower() if not spec.irl.enabled else (
         "bc" if spec.irl.algorithm == "bc" else f"{spec.irl.algorithm}-{spec.train.algo.lower()}")
-    base = Path(root) / spec.name / f"{stamp}-{algo}-s{spec.train.seed}"
+    base = Path(root) / spec.name / (f"{stamp}-{label}" if label else f"{stamp}-{algo}-s{spec.train.seed}")
     path, k = base, 1
     while path.exists():
         k += 1

@@ -11,6 +11,7 @@ from pydantic_core import InitErrorDetails, PydanticCustomError
 
 from ..terms import OBSERVATION_TERMS, REWARD_FEATURES
 from . import geometry as geo
+from .experiment import Experiment
 from .irl import IRL
 from .training import Evaluate, Train
 
@@ -337,7 +338,7 @@ class Reward(Strict):
 
 
 class TaskSpec(Strict):
-    """A whole task: scene, scope, task, episode, actions, observation, reward, train, irl, evaluate."""
+    """A whole task: scene, scope, task, episode, actions, observation, reward, train, irl, evaluate, experiment."""
 
     name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$")
     description: str = ""
@@ -351,6 +352,7 @@ class TaskSpec(Strict):
     train: Train = Train()
     irl: IRL = IRL()
     evaluate: Evaluate = Evaluate()
+    experiment: Experiment = Experiment()
 
     @model_validator(mode="after")
     def _reachable(self):
