@@ -359,6 +359,7 @@ def test_json_schema():
         "reward",
         "train",
         "irl",
+        "experiment",
         "evaluate",
     }
     assert set(schema["required"]) == {"name", "scene", "scope", "task", "reward"}

@@ -312,9 +312,9 @@ def print_table3(result: dict) -> None:
 
     table = Table(title=f"learned scores of {result['n']} procedures against economy and safety "
                         f"(Spearman's rho, p-value)")
-    table.add_column("model")
+    table.add_column("model", no_wrap=True)
     for k, m in PANELS:
-        table.add_column(f"{k}-{m}", justify="right")
+        table.add_column(f"{k} / {m}", justify="right", no_wrap=True, min_width=len(f"{k} / {m}"))
     for algo, cells in result["table3"].items():
         if algo != "heuristic":
             table.add_row(algo.upper(), *(_cell(cells[f"{k}-{m}"]) for k, m in PANELS))
