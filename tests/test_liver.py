@@ -8,6 +8,7 @@ import gymnasium
 import numpy as np
 import pytest
 import yaml
+from rerun.chunk import RrdReader
 from scipy.spatial import cKDTree
 from typer.testing import CliRunner
 
@@ -211,12 +212,15 @@ def test_the_experiment_runs_end_to_end_and_resumes_without_redoing(tmp_path):
     for algo in ("gail", "airl"):
         for cell in result["table3"][algo].values():
             assert -1 <= cell["rho"] <= 1 and 0 <= cell["p"] <= 1
-        assert (run / algo / "networks" / "reward.json").exists() or (run / algo / "networks").is_dir()
+        assert {f.name for f in (run / algo / "networks").iterdir()} >= {"reward.pt", "value.pt", "policy.pt"}
     assert len(list((run / "best").glob("*.npz"))) == 2 and len(list((run / "cohort").glob("*.npz"))) == 6
     assert (run / "table3.png").stat().st_size > 10_000
     verify = subprocess.run(["rerun", "rrd", "verify", str(run / "recording.rrd")], capture_output=True, text=True,
                             timeout=120)
     assert verify.returncode == 0, verify.stderr
+    entities = {str(c.entity_path) for c in RrdReader(str(run / "recording.rrd")).stream()}
+    assert {"/figure", "/summary", "/world/scene/anatomy/right_lobe", "/correlations/airl/value_economy"} <= entities
+    assert sum(e.startswith("/world/procedures/") and e.count("/") == 4 for e in entities) == 6
     before = {p: p.stat().st_mtime_ns for p in (run / "gail" / "networks").iterdir()}
     (run / "experiment.json").unlink()
     res = CliRunner().invoke(app, ["run", "--resume", str(run), "--no-progress"])

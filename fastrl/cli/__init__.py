@@ -308,18 +308,21 @@ def print_table3(result: dict) -> None:
     """Table 3: Spearman's rho (p-value) of learned reward and value against economy and safety."""
     from rich.table import Table
 
-    from ..log.experiment import PANELS, _cell
+    from ..log.experiment import PANELS
+
+    def cell(c: dict) -> str:
+        return "-" if c["rho"] is None else f"{c['rho']:.2f} ({c['p']:.0e})"
 
     table = Table(title=f"learned scores of {result['n']} procedures against economy and safety "
                         f"(Spearman's rho, p-value)")
-    table.add_column("model", no_wrap=True)
+    table.add_column("model", no_wrap=True, min_width=9)
     for k, m in PANELS:
-        table.add_column(f"{k} / {m}", justify="right", no_wrap=True, min_width=len(f"{k} / {m}"))
+        table.add_column(f"{k}\nvs {m}", justify="right", no_wrap=True)
     for algo, cells in result["table3"].items():
         if algo != "heuristic":
-            table.add_row(algo.upper(), *(_cell(cells[f"{k}-{m}"]) for k, m in PANELS))
+            table.add_row(algo.upper(), *(cell(cells[f"{k}-{m}"]) for k, m in PANELS))
     h = result["table3"]["heuristic"]
-    table.add_row("heuristic return", _cell(h["heuristic-economy"]), _cell(h["heuristic-safety"]), "", "")
+    table.add_row("heuristic", cell(h["heuristic-economy"]), cell(h["heuristic-safety"]), "", "")
     out.print(table)
 
 

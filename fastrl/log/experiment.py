@@ -51,7 +51,7 @@ def plot_correlations(result: dict, path: Path) -> Path:
     algos = [a for a in result["table3"] if a != "heuristic"]
     rows = result["procedures"]
     skill = np.array([r["skill"] or 0 for r in rows], float)
-    fig, axes = plt.subplots(len(algos), 4, figsize=(14, 3.2 * len(algos)), squeeze=False)
+    fig, axes = plt.subplots(len(algos), 4, figsize=(14, 3.6 * len(algos)), squeeze=False, layout="constrained")
     for i, algo in enumerate(algos):
         for j, (k, m) in enumerate(PANELS):
             ax = axes[i, j]
@@ -68,7 +68,8 @@ def plot_correlations(result: dict, path: Path) -> Path:
     return Path(path)
 
 
-def log_experiment(path: Path, recording_id: str, task: CompiledTask, scored, learned: dict, result: dict) -> Path:
+def log_experiment(path: Path, recording_id: str, task: CompiledTask, scored, learned: dict, result: dict,
+                   figure: Path | None = None) -> Path:
     """Write the experiment's .rrd: anatomy, every camera path coloured by learned value, Table 3 plots."""
     rec = rr.RecordingStream("fastrl", recording_id=recording_id)
     rec.set_log_time_enabled(False)
@@ -96,10 +97,14 @@ def log_experiment(path: Path, recording_id: str, task: CompiledTask, scored, le
                 c = result["table3"][a][f"{k}-{m}"]
                 views.append(rrb.Spatial2DView(origin=f"/{entity}", name=f"{a.upper()} {k} vs {m}: rho {_cell(c)}"))
         rec.log("summary", rr.TextDocument(table3_markdown(result), media_type=rr.MediaType.MARKDOWN), static=True)
+        tabs = [rrb.Grid(*views, name="interactive: score (up) vs metric (right), 0-100 scaled")]
+        if figure is not None and Path(figure).is_file():
+            rec.log("figure", rr.EncodedImage(path=figure), static=True)
+            tabs.insert(0, rrb.Spatial2DView(origin="/figure", name="correlations (Fig. 8)"))
         rec.send_blueprint(rrb.Blueprint(rrb.Horizontal(
             rrb.Vertical(rrb.Spatial3DView(origin="/world", name=f"camera paths by learned value ({algo})"),
-                         rrb.TextDocumentView(origin="/summary", name="Table 3")),
-            rrb.Grid(*views, name="learned score (up) against ground truth (right), 0-100 scaled"),
+                         rrb.TextDocumentView(origin="/summary", name="Table 3"), row_shares=[3, 2]),
+            rrb.Tabs(*tabs, active_tab=0),
             column_shares=[2, 3]), collapse_panels=True))
     finally:
         rec.flush()

@@ -65,7 +65,8 @@ def run_experiment(run: Path, console: Console, progress: bool) -> Path:
     from ..log.experiment import log_experiment, plot_correlations
 
     plot_correlations(result, run / "table3.png")
-    log_experiment(run / "recording.rrd", run.name, compile_task(spec), scored, learned, result)
+    log_experiment(run / "recording.rrd", run.name, compile_task(spec), scored, learned, result,
+                   figure=run / "table3.png")
     update_meta(run, status="done", seconds=timings)
     return run
 
