@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
@@ -86,7 +87,7 @@ class Organ(Strict):
         base = (info.context or {}).get("base")
         if v is None or base is None:
             return v
-        return str((base / v).resolve()) if not v.startswith("/") else v
+        return v if Path(v).is_absolute() else str((base / v).resolve())
 
 
 def _default_anatomy() -> dict[str, Organ]:
@@ -376,9 +377,9 @@ class TaskSpec(Strict):
             problem = self.avatar_problem(av)
             if problem:
                 errors.append((("task", "avatars", i, "at"), problem, list(av.at)))
-        for i, lm in enumerate(self.task.landmarks):
-            from ..model.anatomy import landmark_pose
+        from ..model.anatomy import landmark_pose
 
+        for i, lm in enumerate(self.task.landmarks):
             pos, _, _ = landmark_pose(anatomy[lm.organ], self.portal_point())
             problem = self.reach_problem(pos, lm.cue or self.task.cue)
             if problem:
