@@ -17,7 +17,7 @@ from fastrl.agents.expert import run_expert_episode
 from fastrl.assess.tour import economy, safety, tour_metrics
 from fastrl.cli import app
 from fastrl.model.anatomy import landmark_pose, organ_vertices
-from fastrl.model.kinematics import Kinematics, solve_view
+from fastrl.model.kinematics import Kinematics, solve_view, view_residuals
 from fastrl.spec import SpecError, load_spec, read_yaml
 
 from .conftest import spec_file
@@ -227,3 +227,11 @@ def test_the_experiment_runs_end_to_end_and_resumes_without_redoing(tmp_path):
     assert res.exit_code == 0, res.output
     assert json.loads((run / "experiment.json").read_text())["table3"] == result["table3"]
     assert {p: p.stat().st_mtime_ns for p in (run / "gail" / "networks").iterdir()} == before  # not retrained
+
+
+def test_a_target_behind_the_camera_is_not_centred():
+    rot, up = np.eye(3), np.array([0.0, 1.0, 0.0])  # camera looks along -z
+    ahead = view_residuals(np.zeros(3), rot, np.array([0.0, 0.0, -0.05]), None, up, 0.05, 0.02)
+    behind = view_residuals(np.zeros(3), rot, np.array([0.001, 0.0, 0.05]), None, up, 0.05, 0.02)
+    assert abs(ahead[0]) < 1e-9 and abs(ahead[1]) < 1e-9 and abs(ahead[3]) < 1e-9
+    assert abs(behind[0]) > math.radians(90) and abs(behind[1]) > math.radians(90)
