@@ -235,3 +235,12 @@ def test_a_target_behind_the_camera_is_not_centred():
     behind = view_residuals(np.zeros(3), rot, np.array([0.001, 0.0, 0.05]), None, up, 0.05, 0.02)
     assert abs(ahead[0]) < 1e-9 and abs(ahead[1]) < 1e-9 and abs(ahead[3]) < 1e-9
     assert abs(behind[0]) > math.radians(90) and abs(behind[1]) > math.radians(90)
+
+
+def test_duplicate_trocar_names_are_a_spec_error(tmp_path):
+    text = LIVER.read_text().replace("    - {name: umbilicus, azimuth: 180",
+                                     "    - {name: umbilicus, azimuth: 0, elevation: 70}\n    - {name: umbilicus, azimuth: 180")
+    path = tmp_path / "dup.yaml"
+    path.write_text(text)
+    with pytest.raises(SpecError, match=r"dup.yaml:16: scene.portals: portal names must be unique"):
+        load_spec(path)

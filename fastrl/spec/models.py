@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
 from ..terms import OBSERVATION_TERMS, REWARD_FEATURES
@@ -52,6 +52,17 @@ class Portal(Strict):
     radius: Pos = Field(0.012, description="radius of the hole (m)")
 
 
+def _unique_names(portals: list[Portal]) -> list[Portal]:
+    """Portal names must be unique."""
+    names = [p.name for p in portals]
+    if len(set(names)) != len(names):
+        raise ValueError(f"portal names must be unique, got {names}")
+    return portals
+
+
+Portals = Annotated[list[Portal], AfterValidator(_unique_names)]
+
+
 class DomeScene(Strict):
     """The FAST dome: a hemispherical shell over a base plate."""
 
@@ -60,15 +71,7 @@ class DomeScene(Strict):
     thickness: float = Field(0.004, gt=0, le=0.02, description="shell thickness (m)")
     rings: int = Field(7, ge=3, le=40, description="shell tiles from rim to crown")
     sectors: int = Field(18, ge=6, le=96, description="shell tiles around")
-    portals: list[Portal] = Field(min_length=1)
-
-    @field_validator("portals")
-    @classmethod
-    def _unique(cls, v):
-        names = [p.name for p in v]
-        if len(set(names)) != len(names):
-            raise ValueError(f"portal names must be unique, got {names}")
-        return v
+    portals: Portals = Field(min_length=1)
 
 
 class Organ(Strict):
@@ -110,16 +113,8 @@ class AbdomenScene(Strict):
     thickness: float = Field(0.01, gt=0, le=0.05, description="wall thickness (m)")
     rings: int = Field(7, ge=3, le=40, description="wall tiles from flank to top")
     sectors: int = Field(18, ge=6, le=96, description="wall tiles around")
-    portals: list[Portal] = Field(min_length=1, description="trocars through the wall")
+    portals: Portals = Field(min_length=1, description="trocars through the wall")
     anatomy: dict[str, Organ] = Field(default_factory=_default_anatomy, min_length=1)
-
-    @field_validator("portals")
-    @classmethod
-    def _unique(cls, v):
-        names = [p.name for p in v]
-        if len(set(names)) != len(names):
-            raise ValueError(f"portal names must be unique, got {names}")
-        return v
 
     @model_validator(mode="after")
     def _inside(self):
