@@ -250,11 +250,15 @@ def train_and_report(spec: Path | None, overrides: list[str], resume: Path | Non
 
     try:
         if resume is not None:
-            if (resume / "experiment.json").exists() or _is_experiment(resume):
+            from .experiment import experiment_and_report, is_experiment
+
+            if is_experiment(resume):
                 return experiment_and_report(None, [], resume, runs, progress)
             run_dir = resume_run(resume, out, progress, timesteps)
         else:
             if load_or_exit(spec, overrides).spec.experiment.enabled:
+                from .experiment import experiment_and_report
+
                 return experiment_and_report(spec, overrides, None, runs, progress)
             run_dir = start_run(spec, overrides, runs, out, progress)
     except RunInterrupted as stop:
@@ -271,59 +275,6 @@ def train_and_report(spec: Path | None, overrides: list[str], resume: Path | Non
     results = json.loads((run_dir / "eval.json").read_text())
     print_eval(results)
     out.print(f"run saved in {escape(str(run_dir))}; view it with: fastrl view {escape(str(run_dir))}")
-
-
-def _is_experiment(run: Path) -> bool:
-    """Whether a run directory holds an experiment (meta.json kind)."""
-    meta = run / "meta.json"
-    return meta.exists() and json.loads(meta.read_text()).get("kind") == "experiment"
-
-
-def experiment_and_report(spec: Path | None, overrides: list[str], resume: Path | None, runs: Path,
-                          progress: bool) -> None:
-    """Run (or continue) the spec's experiment and print its Table 3."""
-    from ..runner import RunInterrupted
-    from ..runner.experiment import run_experiment, start_experiment
-
-    try:
-        run_dir = run_experiment(resume, out, progress) if resume else start_experiment(spec, overrides, runs, out,
-                                                                                        progress)
-    except RunInterrupted as stop:
-        run_dir = stop.run.parent
-        err.print(f"interrupted in {stop.run.name} at {stop.timesteps} timesteps; what is done is saved in "
-                  f"{run_dir}", markup=False)
-        err.print(f"continue with: fastrl run --resume {run_dir}", markup=False)
-        raise typer.Exit(code=130) from None
-    except KeyboardInterrupt:
-        err.print("interrupted; what is done is saved: continue with fastrl run --resume RUN_DIR", markup=False)
-        raise typer.Exit(code=130) from None
-    except (SpecError, FileNotFoundError) as e:
-        exit_with(e)
-    print_table3(json.loads((run_dir / "experiment.json").read_text()))
-    out.print(f"experiment saved in {escape(str(run_dir))}: experiment.json, table3.png; "
-              f"view it with: rerun {escape(str(run_dir / 'recording.rrd'))}")
-
-
-def print_table3(result: dict) -> None:
-    """Table 3: Spearman's rho (p-value) of learned reward and value against economy and safety."""
-    from rich.table import Table
-
-    from ..log.experiment import PANELS
-
-    def cell(c: dict) -> str:
-        return "-" if c["rho"] is None else f"{c['rho']:.2f} ({c['p']:.0e})"
-
-    table = Table(title=f"learned scores of {result['n']} procedures against economy and safety "
-                        f"(Spearman's rho, p-value)")
-    table.add_column("model", no_wrap=True, min_width=9)
-    for k, m in PANELS:
-        table.add_column(f"{k}\nvs {m}", justify="right", no_wrap=True)
-    for algo, cells in result["table3"].items():
-        if algo != "heuristic":
-            table.add_row(algo.upper(), *(cell(cells[f"{k}-{m}"]) for k, m in PANELS))
-    h = result["table3"]["heuristic"]
-    table.add_row("heuristic", cell(h["heuristic-economy"]), cell(h["heuristic-safety"]), "", "")
-    out.print(table)
 
 
 def print_eval(results: dict) -> None:
