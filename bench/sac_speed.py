@@ -1,13 +1,14 @@
-"""How fast the off-policy generator (SAC, with the AIRL discriminator in the loop) trains, per update schedule.
+"""How fast SAC trains per update schedule and implementation, alone and as the off-policy AIRL generator.
 
-    python bench/sac_speed.py                      # all schedules, ~5 min on a quiet 2-core machine
-    python bench/sac_speed.py --schedules sb3-default fast --steps 4000
+    python bench/sac_speed.py                      # all schedules, ~6 min on a quiet 2-core machine
+    python bench/sac_speed.py --schedules sb3 lean-128-4env-half --steps 4000
 
-Each schedule trains SAC on TraceLines (rates actions) with off-policy AIRL from 20 scripted-expert
-demonstrations (current-rollout sampling, spectral norm), first past learning_starts (not timed), then for
---steps environment steps (timed, best of --rounds). The reference is plain stable-baselines3 SAC with its
-default schedule (1 env, 1 gradient step per env step, batch 256, [256, 256]) and no discriminator, measured
-in the same process. Final performance of the schedules is compared by bench/irl_offpolicy.py runs.
+Each schedule trains SAC on TraceLines (rates actions), first past learning_starts (not timed), then for
+--steps environment steps (timed, best of --rounds). Rows marked AIRL run off-policy AIRL from 20 scripted-expert
+demonstrations in the loop (current-rollout sampling, spectral norm, 16 discriminator steps per rollout).
+The reference is plain stable-baselines3 SAC with its default schedule (1 env, 1 gradient step per env step,
+batch 256, [256, 256]) on the heuristic reward, measured in the same process. The schedules without AIRL are
+those of bench/sac_schedules.py, which measures their final performance.
 """
 
 from __future__ import annotations
@@ -23,13 +24,16 @@ import time
 import torch
 
 SCHEDULES = {
-    # name: (n_envs, train_freq per env, gradient_steps, batch, net, with discriminator)
-    "sb3-plain": (1, 1, 1, 256, [256, 256], False),
-    "sb3-default": (1, 1, 1, 256, [256, 256], True),
-    "8 envs, 1 update / 8 steps": (8, 1, 1, 256, [256, 256], True),
-    "8 envs x 32 steps, 32 updates": (8, 32, 32, 256, [256, 256], True),
-    "fast": (8, 32, 32, 256, [128, 128], True),
-    "fast, 1 update / 16 steps": (8, 32, 16, 256, [128, 128], True),
+    # name: (n_envs, train_freq per env, gradient_steps, batch, net, lean update, AIRL discriminator in the loop)
+    "sb3": (1, 1, 1, 256, [256, 256], False, False),
+    "lean": (1, 1, 1, 256, [256, 256], True, False),
+    "lean-128": (1, 1, 1, 256, [128, 128], True, False),
+    "lean-128-half": (1, 2, 1, 256, [128, 128], True, False),
+    "lean-128-4env-half": (4, 1, 2, 256, [128, 128], True, False),
+    "lean-128-4env-quarter": (4, 1, 1, 256, [128, 128], True, False),
+    "sb3 + AIRL": (1, 1, 1, 256, [256, 256], False, True),
+    "8 envs x 32 steps + AIRL": (8, 32, 32, 256, [128, 128], False, True),
+    "8 envs x 32 steps, lean + AIRL": (8, 32, 32, 256, [128, 128], True, True),
 }
 
 
@@ -39,10 +43,11 @@ def build(name: str, demos):
     from fastrl.irl import Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
     from fastrl.spec import load_spec
 
-    n_envs, freq, grad, batch, net, with_disc = SCHEDULES[name]
+    n_envs, freq, grad, batch, net, lean, with_disc = SCHEDULES[name]
     sets = ["actions.mode=rates", "train.algo=SAC", f"train.n_envs={n_envs}", f"train.sac.train_freq={freq}",
             f"train.sac.gradient_steps={grad}", f"train.sac.batch_size={batch}", f"train.sac.net_arch={net}",
-            "train.sac.learning_starts=1000"] + (["irl.algorithm=airl"] if with_disc else [])
+            "train.sac.learning_starts=1000", f"train.sac.lean_update={str(lean).lower()}"]
+    sets += ["irl.algorithm=airl"] if with_disc else []
     spec = load_spec("specs/tracelines.yaml", sets)
     venv = make_vec_env(spec, n_envs, 0)
     model = build_model(spec, venv, replay_buffer_class=RelabelingReplayBuffer if with_disc else None)
@@ -57,7 +62,7 @@ def main() -> None:
     """Time every schedule and print the table."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--schedules", nargs="+", default=list(SCHEDULES), choices=list(SCHEDULES))
-    ap.add_argument("--steps", type=int, default=3000, help="timed env steps per round (x4 for 8-env schedules)")
+    ap.add_argument("--steps", type=int, default=3000, help="timed env steps per round (x n_envs/2 for several envs)")
     ap.add_argument("--rounds", type=int, default=2)
     args = ap.parse_args()
 
@@ -73,14 +78,14 @@ def main() -> None:
 
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
           f"torch {torch.__version__} ({torch.get_num_threads()} thread)")
-    print("| schedule | envs | steps/update | batch | net | steps/s | ms per update | vs plain SB3 SAC |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| schedule | envs | steps/update | batch | net | lean | steps/s | ms per update | vs plain SB3 SAC |")
+    print("|---|---|---|---|---|---|---|---|---|")
     ref = None
-    for name in args.schedules:
+    for name in ["sb3", *[n for n in args.schedules if n != "sb3"]]:  # the reference first
         model, cb = build(name, demos)
-        n_envs, freq, grad, batch, net, _ = SCHEDULES[name]
+        n_envs, freq, grad, batch, net, lean, _ = SCHEDULES[name]
         model.learn(1200, callback=cb)  # past learning_starts
-        steps = args.steps * (4 if n_envs > 1 else 1)
+        steps = args.steps * max(1, n_envs // 2)
         best = 0.0
         for _ in range(args.rounds):
             t0 = time.perf_counter()
@@ -89,8 +94,8 @@ def main() -> None:
         updates_per_step = grad / (freq * n_envs)
         ms = 1e3 / best / updates_per_step
         ref = best if ref is None else ref
-        print(f"| {name} | {n_envs} | {1 / updates_per_step:g} | {batch} | {net} | {best:,.0f} | {ms:.1f} | "
-              f"{best / ref:.1f}x |", flush=True)
+        print(f"| {name} | {n_envs} | {1 / updates_per_step:g} | {batch} | {net} | {'yes' if lean else 'no'} | "
+              f"{best:,.0f} | {ms:.1f} | {best / ref:.1f}x |", flush=True)
 
 
 if __name__ == "__main__":

@@ -25,12 +25,15 @@ def setup():
     return spec, expert_transitions(fastrl.make(spec), expert_trajectories(fastrl.make(spec), range(2)))
 
 
-def train(spec, expert, current_rollout: bool, spectral: bool = False, steps: int = 240):
-    """SAC with the off-policy adversarial callback for a few hundred steps."""
+def train(spec, expert, current_rollout: bool, spectral: bool = False, steps: int = 240, every: int = 0):
+    """SAC with the off-policy adversarial callback for a few hundred steps, counting discriminator fits."""
     venv = make_vec_env(spec, 2, 0)
     model = build_model(spec, venv, replay_buffer_class=RelabelingReplayBuffer)
     disc = Discriminator(venv.observation_space.shape[0], "airl", 0.99, hidden=(32, 32), spectral=spectral)
-    cb = OffPolicyAdversarialCallback(disc, expert, current_rollout=current_rollout, steps=2, batch_size=32)
+    cb = OffPolicyAdversarialCallback(disc, expert, current_rollout=current_rollout, steps=2, batch_size=32,
+                                      every=every)
+    fit, cb.fits = cb.fit.steps, []
+    cb.fit.steps = lambda policy, exp, n: cb.fits.append(model.num_timesteps) or fit(policy, exp, n)
     model.learn(steps, callback=cb)
     return model, disc, cb
 
@@ -46,6 +49,18 @@ def test_current_rollout_sampling_draws_only_from_the_latest_rollout(setup):
     _, _, cb_all = train(spec, expert, current_rollout=False)
     pos_all, _ = cb_all.last_policy_rows
     assert len(set(pos_all.tolist())) > steps  # the ablation samples the whole buffer
+
+
+def test_fitting_every_k_steps_uses_everything_since_the_last_fit(setup):
+    spec, expert = setup
+    model, _, cb = train(spec, expert, current_rollout=True)
+    assert cb.fits == list(range(64, 241, 16))  # after every rollout of 8 steps x 2 envs, past learning_starts
+    model, _, cb = train(spec, expert, current_rollout=True, every=64)
+    assert cb.fits == [64, 128, 192]
+    buf = model.replay_buffer
+    pos, env_idx = cb.last_policy_rows  # the 64 transitions collected between the fits at 128 and 192
+    assert len(pos) == 64 and sorted(set(env_idx.tolist())) == [0, 1]
+    assert sorted(set(pos.tolist())) == [(buf.pos - 24 - k) % buf.buffer_size for k in range(32, 0, -1)]
 
 
 def test_sampled_rewards_are_relabelled_by_the_current_discriminator(setup):

@@ -12,6 +12,7 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
 from ..env.fast_env import FastEnv
+from .lean_sac import LeanSAC
 from ..spec.models import TaskSpec
 
 ALGOS = {"PPO": PPO, "SAC": SAC}
@@ -55,8 +56,9 @@ def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) 
     params = {**spec.train.params().model_dump(), **{k: v for k, v in extra.items() if v is not None}}
     net, act = params.pop("net_arch"), ACTIVATIONS[params.pop("activation")]
     arch = {"pi": net, "vf": net} if spec.train.algo == "PPO" else {"pi": net, "qf": net}
+    algo = LeanSAC if params.pop("lean_update", False) else ALGOS[spec.train.algo]
     torch.set_num_threads(1)
-    return ALGOS[spec.train.algo]("MlpPolicy", venv, seed=spec.train.seed if seed is None else seed, verbose=0,
+    return algo("MlpPolicy", venv, seed=spec.train.seed if seed is None else seed, verbose=0,
                                   device="cpu", policy_kwargs={"net_arch": arch, "activation_fn": act}, **params)
 
 

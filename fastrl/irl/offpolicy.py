@@ -2,7 +2,9 @@
 
 Two switches, for ablations: spectral normalisation of the discriminator (a `Discriminator` option) and
 `current_rollout`, which trains the discriminator only on the transitions of the latest rollout
-(train_freq x n_envs) instead of on samples of the whole replay buffer.
+(train_freq x n_envs) instead of on samples of the whole replay buffer. With `every`, the discriminator fits
+once per that many env steps instead, and its "current rollout" is everything collected since the last fit:
+SAC schedules with short rollouts then do not pay a discriminator fit per env step.
 """
 
 from __future__ import annotations
@@ -42,9 +44,10 @@ class OffPolicyAdversarialCallback(BaseCallback):
     """Before each SAC update: fit the discriminator on current-rollout (or replay) samples vs expert samples."""
 
     def __init__(self, disc: Discriminator, expert: Transitions, current_rollout: bool = True, steps: int = 4,
-                 batch_size: int = 256, lr: float = 3e-4, seed: int = 0):
+                 batch_size: int = 256, lr: float = 3e-4, seed: int = 0, every: int = 0):
         super().__init__()
         self.disc, self.expert, self.current_rollout, self.n_steps = disc, expert, current_rollout, steps
+        self.every, self.last_fit = every, 0
         self.fit = DiscriminatorFit(disc, lr, batch_size, seed)
         self.stats: dict[str, float] = {}
         self.last_policy_rows: tuple[np.ndarray, np.ndarray] | None = None
@@ -61,7 +64,8 @@ class OffPolicyAdversarialCallback(BaseCallback):
     def _policy_rows(self) -> tuple[np.ndarray, np.ndarray]:
         """Buffer rows the discriminator sees as policy samples: the latest rollout, or uniform over the buffer."""
         buf, model = self.model.replay_buffer, self.model
-        k = model.train_freq.frequency * buf.n_envs
+        k = model.num_timesteps - self.last_fit if self.every else model.train_freq.frequency * buf.n_envs
+        k = min(k, buf.buffer_size * buf.n_envs)
         if self.current_rollout:
             return buf.latest(k)
         size = buf.buffer_size if buf.full else buf.pos
@@ -69,10 +73,12 @@ class OffPolicyAdversarialCallback(BaseCallback):
         return self.fit.rng.integers(0, size, n), self.fit.rng.integers(0, buf.n_envs, n)
 
     def _on_rollout_end(self) -> None:
-        if self.model.num_timesteps < self.model.learning_starts:
+        now = self.model.num_timesteps
+        if now < self.model.learning_starts or (self.every and now - self.last_fit < self.every):
             return
         buf = self.model.replay_buffer
         pos, env_idx = self.last_policy_rows = self._policy_rows()
+        self.last_fit = now
         obs = normalize_obs(self.model, buf.observations[pos, env_idx])
         nxt = normalize_obs(self.model, buf.next_observations[pos, env_idx])
         term = buf.dones[pos, env_idx] * (1 - buf.timeouts[pos, env_idx])

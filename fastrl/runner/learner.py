@@ -112,7 +112,7 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     transitions = expert_transitions(FastEnv(spec), demos)
     if off_policy:
         cb = OffPolicyAdversarialCallback(disc, transitions, d.current_rollout, d.steps, d.batch_size,
-                                          d.learning_rate, spec.train.seed)
+                                          d.learning_rate, spec.train.seed, d.every)
     else:
         cb = AdversarialCallback(disc, transitions, d.epochs, d.batch_size, d.learning_rate, spec.train.seed,
                                  d.entropy)

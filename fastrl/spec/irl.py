@@ -29,6 +29,8 @@ class DiscriminatorSettings(Strict):
     batch_size: int = Field(256, ge=2)
     epochs: int = Field(2, ge=1, description="on-policy (PPO): passes over each rollout")
     steps: int = Field(4, ge=1, description="off-policy (SAC): gradient steps after each rollout")
+    every: int = Field(0, ge=0, description="off-policy: env steps (all envs) between discriminator fits, on the "
+                       "samples since the last fit; 0: after every rollout")
     spectral_norm: bool = Field(False, description="spectrally normalise every layer")
     current_rollout: bool = Field(True, description="off-policy: train only on the latest rollout's samples")
     absorbing: bool = Field(True, description="terminated episodes continue in an absorbing state")

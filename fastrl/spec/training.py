@@ -47,6 +47,8 @@ class SACParams(Params):
     target_entropy: float | Literal["auto"] = "auto"
     net_arch: list[int] = [256, 256]
     activation: Literal["tanh", "relu"] = "relu"
+    lean_update: bool = Field(True, description="fastrl's leaner gradient step (same maths as SB3's, tested "
+                              "equal); false: stable-baselines3's own SAC.train")
 
 
 class Normalize(BaseModel):
