@@ -31,12 +31,16 @@ VARIANTS = {
     "no-current-rollout": ["irl.discriminator.spectral_norm=true", "irl.discriminator.current_rollout=false"],
     "no-spectral-norm": ["irl.discriminator.spectral_norm=false", "irl.discriminator.current_rollout=true"],
 }
-# the fast SAC schedule measured by bench/sac_speed.py: 8 envs, 32 steps each between updates, 1 update per 8 steps
-SCHEDULE = ["train.algo=SAC", "train.n_envs=8", "train.sac.train_freq=32",
-            "train.sac.gradient_steps=32", "train.sac.net_arch=[128, 128]", "train.sac.learning_starts=5000",
-            "irl.algorithm=airl", "irl.discriminator.steps=16", "irl.discriminator.learning_rate=1e-3",
-            "evaluate.periodic_episodes=10", "train.checkpoint_every=50000",
-            "train.keep_checkpoints=100", "evaluate.record_episodes=5"]
+COMMON = ["train.algo=SAC", "train.sac.net_arch=[128, 128]", "train.sac.learning_starts=5000", "irl.algorithm=airl",
+          "irl.discriminator.steps=16", "irl.discriminator.learning_rate=1e-3", "evaluate.periodic_episodes=10",
+          "train.checkpoint_every=50000", "train.keep_checkpoints=100", "evaluate.record_episodes=5"]
+SCHEDULES = {  # SAC schedules of bench/sac_speed.py
+    # 8 envs, 32 steps each between 32 updates (1 update per 8 steps); the discriminator fits after every rollout
+    "8x32": ["train.n_envs=8", "train.sac.train_freq=32", "train.sac.gradient_steps=32"],
+    # 4 envs, 1 update per 4 steps; the discriminator fits every 256 steps on the samples since its last fit
+    "4env-quarter": ["train.n_envs=4", "train.sac.train_freq=1", "train.sac.gradient_steps=1",
+                     "irl.discriminator.every=256"],
+}
 
 
 def run(args) -> None:
@@ -46,8 +50,9 @@ def run(args) -> None:
     for seed in args.seeds:
         for variant in args.variants:
             root = Path(args.root) / variant
-            sets = [*SCHEDULE, *VARIANTS[variant], f"actions.mode={args.mode}", f"train.seed={seed}",
-                    f"train.timesteps={args.steps}", f"evaluate.periodic_every={args.eval_every}"]
+            sets = [*COMMON, *SCHEDULES[args.schedule], *VARIANTS[variant], f"actions.mode={args.mode}",
+                    f"train.seed={seed}", f"train.timesteps={args.steps}", f"evaluate.periodic_every={args.eval_every}",
+                    *args.set]
             t0 = time.perf_counter()
             path = start_run("specs/tracelines.yaml", sets, root, progress=not args.quiet)
             print(f"{variant} seed {seed}: {path} in {time.perf_counter() - t0:.0f} s", flush=True)
@@ -114,6 +119,8 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=100_000)
     ap.add_argument("--mode", default="rates", choices=["rates", "continuous"],
                     help="action mode: rates (5 portal rates, first order) or continuous (7 tip accelerations)")
+    ap.add_argument("--schedule", default="8x32", choices=list(SCHEDULES), help="SAC update schedule")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="more spec overrides")
     ap.add_argument("--eval-every", type=int, default=25_000, help="steps between evaluations during training")
     ap.add_argument("--root", default="runs/bench-offpolicy")
     ap.add_argument("--figure", default="docs/irl_fig5.png")

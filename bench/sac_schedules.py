@@ -33,12 +33,16 @@ SCHEDULES = {
             ["train.sac.lean_update=false"]),
     "lean": ("same schedule, fastrl's lean update", []),
     "lean-128": ("lean, [128, 128]", ["train.sac.net_arch=[128, 128]"]),
+    "lean-128-b128": ("lean, [128, 128], batch 128", ["train.sac.net_arch=[128, 128]", "train.sac.batch_size=128"]),
     "lean-128-half": ("lean, [128, 128], 1 update / 2 steps",
                       ["train.sac.net_arch=[128, 128]", "train.sac.train_freq=2"]),
     "lean-128-4env-half": ("lean, [128, 128], 4 envs, 2 updates / 4 steps",
                            ["train.sac.net_arch=[128, 128]", "train.n_envs=4", "train.sac.gradient_steps=2"]),
     "lean-128-4env-quarter": ("lean, [128, 128], 4 envs, 1 update / 4 steps",
                               ["train.sac.net_arch=[128, 128]", "train.n_envs=4", "train.sac.gradient_steps=1"]),
+    "lean-128-4env-quarter-lr1e-3": ("the same, learning rate 1e-3",
+                                     ["train.sac.net_arch=[128, 128]", "train.n_envs=4", "train.sac.gradient_steps=1",
+                                      "train.sac.learning_rate=1e-3"]),
 }
 BASE = ["actions.mode=rates", "train.algo=SAC", "train.n_envs=1", "evaluate.periodic_episodes=10",
         "train.checkpoint_every=25000", "evaluate.record_episodes=3", "evaluate.image_every=0"]

@@ -28,6 +28,7 @@ SCHEDULES = {
     "sb3": (1, 1, 1, 256, [256, 256], False, False),
     "lean": (1, 1, 1, 256, [256, 256], True, False),
     "lean-128": (1, 1, 1, 256, [128, 128], True, False),
+    "lean-128-b128": (1, 1, 1, 128, [128, 128], True, False),
     "lean-128-half": (1, 2, 1, 256, [128, 128], True, False),
     "lean-128-4env-half": (4, 1, 2, 256, [128, 128], True, False),
     "lean-128-4env-quarter": (4, 1, 1, 256, [128, 128], True, False),

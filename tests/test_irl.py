@@ -138,6 +138,14 @@ def test_standard_airl_is_one_network_on_transitions():
         disc.reward(s)
 
 
+def test_airl_without_the_policy_term_ignores_log_pi():
+    disc = Discriminator(6, "airl", 0.9, policy_term=False)
+    s, s2, term = augment(torch.randn(8, 6)), augment(torch.randn(8, 6)), torch.zeros(8)
+    with torch.no_grad():
+        assert torch.allclose(disc.logits(s, s2, term, torch.full((8,), 300.0)), disc.f(s, s2, term))
+    assert disc.config()["policy_term"] is False and Discriminator(6, "airl", 0.9).config()["policy_term"]
+
+
 @pytest.mark.parametrize("kind", ["gail", "airl"])
 def test_absorbing_rows_train_only_the_absorbing_constants(kind):
     torch.manual_seed(0)

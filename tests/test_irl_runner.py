@@ -55,6 +55,8 @@ def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
     if algorithm == "bc":
         assert not (run / "networks" / "reward.pt").exists()
         return
+    disc = json.loads((run / "networks" / "reward.json").read_text())["discriminator"]
+    assert disc["policy_term"] is ("train.algo=SAC" not in extra)  # AIRL on SAC: f alone by default
     rewards = nets.reward(obs)
     assert rewards.shape == (len(obs) - 1,) and np.isfinite(rewards).all()
     assert np.isfinite(nets.learned_return(obs, terminated=bool(infos[-1]["success"])))

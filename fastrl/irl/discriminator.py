@@ -42,9 +42,9 @@ class Discriminator(nn.Module):
     """Logits of 'expert' for transitions (s, s', terminal, log pi(a|s)) of augmented states; state-only rewards."""
 
     def __init__(self, obs_dim: int, kind: Literal["gail", "airl"], gamma: float, hidden=(64, 64),
-                 spectral: bool = False, absorbing: bool = True, shaped: bool = True):
+                 spectral: bool = False, absorbing: bool = True, shaped: bool = True, policy_term: bool = True):
         super().__init__()
-        self.obs_dim, self.kind, self.gamma = obs_dim, kind, gamma
+        self.obs_dim, self.kind, self.gamma, self.policy_term = obs_dim, kind, gamma, policy_term
         self.hidden, self.spectral, self.absorbing = tuple(hidden), spectral, absorbing
         self.shaped = kind == "airl" and shaped  # AIRL's shaped form; else one network on (s, s')
         width = obs_dim + 1
@@ -78,9 +78,9 @@ class Discriminator(nn.Module):
         return self._r(s) + self.gamma * keep * self._h(s2) - self._h(s)
 
     def logits(self, s, s2, terminal, log_pi):
-        """log D - log(1 - D): AIRL's f - log pi, or GAIL's network output."""
+        """log D - log(1 - D): AIRL's f - log pi (f alone without the policy term), or GAIL's network output."""
         if self.kind == "airl":
-            return self.f(s, s2, terminal) - log_pi
+            return self.f(s, s2, terminal) - (log_pi if self.policy_term else 0.0)
         return self._net(s, s2)
 
     def generator_reward(self, s, s2, terminal, log_pi, entropy: bool = True):
@@ -116,4 +116,5 @@ class Discriminator(nn.Module):
     def config(self) -> dict:
         """What rebuilds this discriminator (for pickle-free saving)."""
         return {"obs_dim": self.obs_dim, "kind": self.kind, "gamma": self.gamma, "hidden": list(self.hidden),
-                "spectral": self.spectral, "absorbing": self.absorbing, "shaped": self.shaped}
+                "spectral": self.spectral, "absorbing": self.absorbing, "shaped": self.shaped,
+                "policy_term": self.policy_term}

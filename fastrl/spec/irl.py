@@ -35,6 +35,9 @@ class DiscriminatorSettings(Strict):
     current_rollout: bool = Field(True, description="off-policy: train only on the latest rollout's samples")
     absorbing: bool = Field(True, description="terminated episodes continue in an absorbing state")
     shaped: bool = Field(True, description="AIRL: f = r_psi(s) + gamma h(s') - h(s); false: the standard f(s, s')")
+    policy_term: bool | None = Field(None, description="AIRL: D's logit is f - log pi(a|s); false: f alone. Default "
+                                     "(null): on for PPO, off for SAC, whose squashed Gaussian gives the expert's "
+                                     "saturated actions a log pi of hundreds, which decides D on its own")
     entropy: bool = Field(True, description="AIRL on PPO: the generator's reward keeps -log pi (max-entropy form)")
 
 
