@@ -44,7 +44,8 @@ SCHEDULES = {
                                      ["train.sac.net_arch=[128, 128]", "train.n_envs=4", "train.sac.gradient_steps=1",
                                       "train.sac.learning_rate=1e-3"]),
 }
-BASE = ["actions.mode=rates", "train.algo=SAC", "train.n_envs=1", "evaluate.periodic_episodes=10",
+BASE = ["actions.mode=rates", "train.algo=SAC", "train.n_envs=1", "train.sac.net_arch=[256, 256]",
+        "train.sac.batch_size=256", "evaluate.periodic_episodes=10",
         "train.checkpoint_every=25000", "evaluate.record_episodes=3", "evaluate.image_every=0"]
 
 

@@ -78,7 +78,7 @@ def main() -> None:
         return cache["t"]
 
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
-          f"torch {torch.__version__} ({torch.get_num_threads()} thread)")
+          f"torch {torch.__version__} (models on 1 thread)")
     print("| schedule | envs | steps/update | batch | net | lean | steps/s | ms per update | vs plain SB3 SAC |")
     print("|---|---|---|---|---|---|---|---|---|")
     ref = None

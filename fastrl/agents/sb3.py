@@ -12,8 +12,8 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
 from ..env.fast_env import FastEnv
-from .lean_sac import LeanSAC
 from ..spec.models import TaskSpec
+from .lean_sac import LeanSAC
 
 ALGOS = {"PPO": PPO, "SAC": SAC}
 ACTIVATIONS = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}
@@ -59,7 +59,7 @@ def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) 
     algo = LeanSAC if params.pop("lean_update", False) else ALGOS[spec.train.algo]
     torch.set_num_threads(1)
     return algo("MlpPolicy", venv, seed=spec.train.seed if seed is None else seed, verbose=0,
-                                  device="cpu", policy_kwargs={"net_arch": arch, "activation_fn": act}, **params)
+                device="cpu", policy_kwargs={"net_arch": arch, "activation_fn": act}, **params)
 
 
 def _optimizers(model: BaseAlgorithm) -> dict[str, torch.optim.Optimizer]:
