@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from irl_tasks import curve
+from irl_tasks import curve, plot_mean_range, save_figure
 
 VARIANTS = {
     "full": ["irl.discriminator.spectral_norm=true", "irl.discriminator.current_rollout=true"],
@@ -93,11 +93,7 @@ def report(args) -> None:
             rows.append({"variant": variant, "run": str(run_dir), "final_subtasks": finals[-1],
                          "final_success": success[-1], "steps_to_90": hit, "train_fps": fps[-1],
                          "curve": {"steps": steps, "subtasks": subs}})
-        n = min(len(c[0]) for c in curves)
-        steps = np.array(curves[0][0][:n])
-        subs = np.array([c[1][:n] for c in curves])
-        line, = ax.plot([0, *steps], [0, *subs.mean(0)], label=f"{variant} (n={len(runs)})")
-        ax.fill_between([0, *steps], [0, *subs.min(0)], [0, *subs.max(0)], color=line.get_color(), alpha=0.15)
+        plot_mean_range(ax, curves, f"{variant} (n={len(runs)})")
         hits = ", ".join(f"{h:,}" if h else "-" for h in to90)
         print(f"| {variant} | {len(runs)} | {np.mean(finals):.1%} ± {np.std(finals):.1%} | {np.mean(success):.0%} | "
               f"{hits} | {np.mean(fps):.0f} |")
@@ -106,11 +102,7 @@ def report(args) -> None:
            ylabel="subtasks completed (10 eval seeds)", ylim=(-0.02, 1.02))
     ax.legend()
     fig.tight_layout()
-    out = Path(args.figure)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    out.with_suffix(".json").write_text(json.dumps(rows, indent=2))
-    print(f"figure: {out}")
+    save_figure(fig, args.figure, rows)
 
 
 def main() -> None:

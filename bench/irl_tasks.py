@@ -58,6 +58,26 @@ def curve(run_dir: Path) -> tuple[list[int], list[float], list[float]]:
     return steps, subtasks, fps_time
 
 
+def plot_mean_range(ax, curves: list[tuple[list[int], list[float]]], label: str, alpha: float = 0.15) -> None:
+    """Mean and min-max band of evaluation curves over seeds (cut to the shortest), starting at (0, 0)."""
+    import numpy as np
+
+    n = min(len(c[0]) for c in curves)
+    steps = [0, *curves[0][0][:n]]
+    subs = np.array([[0, *c[1][:n]] for c in curves])
+    line, = ax.plot(steps, subs.mean(0), label=label)
+    ax.fill_between(steps, subs.min(0), subs.max(0), color=line.get_color(), alpha=alpha)
+
+
+def save_figure(fig, path: str, rows) -> None:
+    """The figure as PNG and its data as JSON beside it."""
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    out.with_suffix(".json").write_text(json.dumps(rows, indent=2))
+    print(f"figure: {out}")
+
+
 def algo_of(run_dir: Path) -> str:
     """ppo, gail or airl, from the run directory name."""
     name = run_dir.name.split("-", 1)[1]

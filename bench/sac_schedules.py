@@ -25,7 +25,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from irl_tasks import curve
+from irl_tasks import curve, plot_mean_range, save_figure
 
 SCHEDULES = {
     # name: (what differs from the reference, spec overrides)
@@ -98,20 +98,13 @@ def report(args) -> None:
         print(f"| {name} | {what} | {len(runs)} | {np.mean(finals):.1%} ± {np.std(finals):.1%} | "
               f"{np.mean([r['final_success'] for r in runs]):.0%} | {fps:.0f} | "
               f"{np.mean([r['train_minutes'] for r in runs]):.1f} min | {speed} |")
-        n = min(len(r["curve"]["steps"]) for r in runs)
-        steps = np.array(runs[0]["curve"]["steps"][:n])
-        subs = np.array([r["curve"]["subtasks"][:n] for r in runs])
-        line, = ax.plot([0, *steps], [0, *subs.mean(0)], label=f"{name} (n={len(runs)}, {fps:.0f} steps/s)")
-        ax.fill_between([0, *steps], [0, *subs.min(0)], [0, *subs.max(0)], color=line.get_color(), alpha=0.12)
+        plot_mean_range(ax, [(r["curve"]["steps"], r["curve"]["subtasks"]) for r in runs],
+                        f"{name} (n={len(runs)}, {fps:.0f} steps/s)", alpha=0.12)
     ax.set(title="SAC on TraceLines (rates): update schedules, mean and range over seeds",
            xlabel="environment steps", ylabel="subtasks completed (10 eval seeds)", ylim=(-0.02, 1.02))
     ax.legend(fontsize=8)
     fig.tight_layout()
-    out = Path(args.figure)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    out.with_suffix(".json").write_text(json.dumps(rows, indent=2))
-    print(f"figure: {out}")
+    save_figure(fig, args.figure, rows)
 
 
 def main() -> None:
