@@ -41,7 +41,8 @@ def run(args) -> None:
     for task in args.tasks:
         for algo in args.algos:
             t0 = time.perf_counter()
-            path = start_run(Path("specs") / f"{task}.yaml", overrides(algo, args.seed, args.cap), args.root,
+            changes = overrides(algo, args.seed, args.cap) + (args.set if algo in ("gail", "airl") else [])
+            path = start_run(Path("specs") / f"{task}.yaml", changes, args.root,
                              progress=not args.quiet)
             print(f"{task} {algo}: {path} in {time.perf_counter() - t0:.0f} s", flush=True)
 
@@ -146,6 +147,8 @@ def main() -> None:
     ap.add_argument("--root", default="runs/bench-irl")
     ap.add_argument("--figure", default="docs/irl_fig4.png")
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
+    ap.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
+                    help="spec overrides for the GAIL and AIRL runs, e.g. irl.discriminator.history=200000")
     args = ap.parse_args()
     run(args) if args.mode == "run" else report(args)
 

@@ -8,44 +8,69 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 from .discriminator import Discriminator, augment
 from .fitting import DiscriminatorFit, Transitions, make_batch
-from .generator import expert_batch, normalize_obs
+from .generator import current_original_obs, original_obs, transitions_batch
+from .history import PolicyHistory
 
 
 class AdversarialCallback(BaseCallback):
-    """After each PPO rollout: fit the discriminator (expert vs policy) and replace the rollout's rewards."""
+    """After each PPO rollout: fit the discriminator (expert vs policy) and replace the rollout's rewards.
+
+    With `history` > 0, each fit's policy side is the rollout plus as many transitions drawn from a reservoir of
+    that many earlier ones (raw observations, normalised and scored under the current policy when drawn)."""
 
     def __init__(self, disc: Discriminator, expert: Transitions, epochs: int = 2, batch_size: int = 256,
-                 lr: float = 3e-4, seed: int = 0, entropy: bool = True):
+                 lr: float = 3e-4, seed: int = 0, entropy: bool = True, history: int = 0):
         super().__init__()
         self.disc, self.expert, self.n_epochs, self.entropy = disc, expert, epochs, entropy
         self.fit = DiscriminatorFit(disc, lr, batch_size, seed)
+        self.history = PolicyHistory(history, seed) if history else None
         self.stats: dict[str, float] = {}
 
     def _on_rollout_start(self) -> None:
         self.next_obs, self.terminal, self.env_rewards = [], [], []
+        self.raw_obs = [np.array(current_original_obs(self.model), np.float32)] if self.history is not None else None
+        self.raw_next = []
 
     def _on_step(self) -> bool:
         new_obs = np.array(self.locals["new_obs"], dtype=np.float32)
         infos, dones = self.locals["infos"], self.locals["dones"]
         terminal = np.zeros(len(dones), np.float32)
         for i, done in enumerate(dones):
-            if done:
-                new_obs[i] = normalize_obs(self.model, infos[i]["terminal_observation"][None])[0]
+            if done:  # VecNormalize has already normalised the terminal observation
+                new_obs[i] = infos[i]["terminal_observation"]
                 terminal[i] = 0.0 if infos[i].get("TimeLimit.truncated", False) else 1.0
         self.next_obs.append(new_obs)
         self.terminal.append(terminal)
         self.env_rewards.append(np.array(self.locals["rewards"], np.float32))
+        if self.history is not None:
+            raw_new = np.array(current_original_obs(self.model), np.float32)  # after automatic resets
+            self.raw_obs.append(raw_new)
+            raw_next = raw_new.copy()
+            raw_next[dones] = original_obs(self.model, new_obs[dones])
+            self.raw_next.append(raw_next)
         return True
+
+    def _with_history(self, policy, term: np.ndarray):
+        """The rollout's batch plus as many rows from the history; then the rollout joins the history."""
+        buf = self.model.rollout_buffer
+        n = len(term)
+        raw = Transitions(np.stack(self.raw_obs[:-1]).reshape(n, -1), np.stack(self.raw_next).reshape(n, -1),
+                          term, buf.actions.reshape(n, *buf.actions.shape[2:]))
+        if len(self.history):
+            policy = policy.cat(transitions_batch(self.model, self.history.sample(n), self.disc))
+        self.history.add(raw)
+        return policy
 
     def _on_rollout_end(self) -> None:
         buf = self.model.rollout_buffer
         n, e = buf.buffer_size, buf.n_envs
         obs, nxt = buf.observations.reshape(n * e, -1), np.stack(self.next_obs).reshape(n * e, -1)
         term, log_pi = np.stack(self.terminal).reshape(n * e), buf.log_probs.reshape(n * e)
-        policy = make_batch(obs, nxt, term, log_pi, self.disc.absorbing)
-        expert = expert_batch(self.model, self.expert, self.disc)
+        rollout = make_batch(obs, nxt, term, log_pi, self.disc.absorbing)
+        policy = rollout if self.history is None else self._with_history(rollout, term)
+        expert = transitions_batch(self.model, self.expert, self.disc)
         self.stats.update(self.fit.epochs(policy, expert, self.n_epochs))
-        self.stats.update(self.fit.reward_stats(policy, expert))
+        self.stats.update(self.fit.reward_stats(rollout, expert))
         with torch.no_grad():
             s, s2 = augment(torch.as_tensor(obs)), augment(torch.as_tensor(nxt))
             t, lp = torch.as_tensor(term), torch.as_tensor(log_pi)

@@ -12,12 +12,19 @@ from .discriminator import Discriminator, absorbing_states, augment
 
 @dataclass
 class Transitions:
-    """Expert transitions (raw observations) with the actions that produced them."""
+    """Transitions (raw observations) with the actions that produced them."""
 
     obs: np.ndarray
     next_obs: np.ndarray
     terminal: np.ndarray
     actions: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.obs)
+
+    def take(self, rows) -> Transitions:
+        """The rows `rows`."""
+        return Transitions(self.obs[rows], self.next_obs[rows], self.terminal[rows], self.actions[rows])
 
 
 @dataclass
@@ -35,6 +42,11 @@ class Batch:
     def take(self, idx) -> Batch:
         """The rows idx."""
         return Batch(self.s[idx], self.s2[idx], self.terminal[idx], self.log_pi[idx])
+
+    def cat(self, other: Batch) -> Batch:
+        """This batch's rows followed by other's."""
+        return Batch(*(torch.cat([a, b]) for a, b in ((self.s, other.s), (self.s2, other.s2),
+                                                       (self.terminal, other.terminal), (self.log_pi, other.log_pi))))
 
 
 def make_batch(obs, next_obs, terminal, log_pi, absorbing: bool) -> Batch:

@@ -31,12 +31,25 @@ def log_prob(model: BaseAlgorithm, obs: torch.Tensor, actions: torch.Tensor) -> 
         return lp
 
 
-def expert_batch(model: BaseAlgorithm, expert: Transitions, disc: Discriminator, rows: np.ndarray | None = None
-                 ) -> Batch:
-    """The demonstrations (or only `rows` of them) as a discriminator batch, under the current policy."""
+def original_obs(model: BaseAlgorithm, obs: np.ndarray) -> np.ndarray:
+    """Undo the training env's observation normalisation (exact unless a value was clipped)."""
+    env = model.get_env()
+    return env.unnormalize_obs(obs) if isinstance(env, VecNormalize) else obs
+
+
+def current_original_obs(model: BaseAlgorithm) -> np.ndarray:
+    """The training envs' latest observations before normalisation (after any automatic reset)."""
+    env = model.get_env()
+    return env.get_original_obs() if isinstance(env, VecNormalize) else model._last_obs
+
+
+def transitions_batch(model: BaseAlgorithm, data: Transitions, disc: Discriminator, rows: np.ndarray | None = None
+                      ) -> Batch:
+    """Transitions with raw observations (or only `rows` of them) as a discriminator batch: normalised as the
+    policy sees them now, log pi(a|s) under the current policy."""
     if rows is not None:
-        expert = Transitions(expert.obs[rows], expert.next_obs[rows], expert.terminal[rows], expert.actions[rows])
-    obs = torch.as_tensor(normalize_obs(model, expert.obs), dtype=torch.float32)
-    nxt = normalize_obs(model, expert.next_obs)
-    lp = log_prob(model, obs, torch.as_tensor(expert.actions, dtype=torch.float32))
-    return make_batch(obs, nxt, expert.terminal, lp, disc.absorbing)
+        data = data.take(rows)
+    obs = torch.as_tensor(normalize_obs(model, data.obs), dtype=torch.float32)
+    nxt = normalize_obs(model, data.next_obs)
+    lp = log_prob(model, obs, torch.as_tensor(data.actions, dtype=torch.float32))
+    return make_batch(obs, nxt, data.terminal, lp, disc.absorbing)

@@ -19,7 +19,7 @@ from stable_baselines3.common.type_aliases import ReplayBufferSamples
 
 from .discriminator import Discriminator, augment
 from .fitting import DiscriminatorFit, Transitions, make_batch
-from .generator import expert_batch, log_prob, normalize_obs
+from .generator import log_prob, normalize_obs, transitions_batch
 
 
 class RelabelingReplayBuffer(ReplayBuffer):
@@ -87,7 +87,7 @@ class OffPolicyAdversarialCallback(BaseCallback):
         policy = make_batch(obs_t, nxt, term, lp, self.disc.absorbing)
         # only as many expert rows as the fit draws: normalising and scoring all of them every rollout costs more
         rows = self.fit.rng.integers(0, len(self.expert.obs), self.fit.batch_size * self.n_steps)
-        expert = expert_batch(self.model, self.expert, self.disc, rows)
+        expert = transitions_batch(self.model, self.expert, self.disc, rows)
         self.stats.update(self.fit.steps(policy, expert, self.n_steps))
         self.stats.update(self.fit.reward_stats(policy, expert))
         for key, value in self.stats.items():

@@ -33,6 +33,9 @@ class DiscriminatorSettings(Strict):
                        "samples since the last fit; 0: after every rollout")
     spectral_norm: bool = Field(False, description="spectrally normalise every layer")
     current_rollout: bool = Field(True, description="off-policy: train only on the latest rollout's samples")
+    history: int = Field(0, ge=0, description="on-policy (PPO): keep a uniform sample of this many earlier policy "
+                         "transitions and add as many of them as the rollout has to each fit's policy side, so the "
+                         "learned reward keeps rating what earlier policies did low; 0: the rollout alone")
     absorbing: bool = Field(True, description="terminated episodes continue in an absorbing state")
     shaped: bool = Field(True, description="AIRL: f = r_psi(s) + gamma h(s') - h(s); false: the standard f(s, s')")
     policy_term: bool | None = Field(None, description="AIRL: D's logit is f - log pi(a|s); false: f alone. Default "
