@@ -2,6 +2,7 @@
 
     python bench/assess_cohort.py                  # 3 tasks x 5 levels x 10 trainees, GAIL and AIRL runs
     python bench/assess_cohort.py --tasks tracelines --timing-only
+    python bench/assess_cohort.py --irl-root runs/other-irl-runs --out /tmp/other.json   # other runs
 
 For each task: a cohort (`fastrl cohort SPEC --levels 5 --per-level 10`, written once under
 runs/bench-assess/<task>/cohort) is scored with each inverse-RL run of bench/irl_tasks.py
@@ -42,24 +43,25 @@ def cohort_dir(task: str, levels: int, per_level: int) -> Path:
     return out
 
 
-def irl_run(task: str, algorithm: str) -> Path | None:
-    """The newest inverse-RL run of bench/irl_tasks.py for a task and algorithm."""
-    found = sorted(Path("runs/bench-irl", task).glob(f"*-{algorithm}-ppo-s0"))
+def irl_run(task: str, algorithm: str, root: Path) -> Path | None:
+    """The newest inverse-RL run of bench/irl_tasks.py under root for a task and algorithm."""
+    found = sorted(Path(root, task).glob(f"*-{algorithm}-ppo-s0"))
     return found[-1] if found else None
 
 
-def score_task(task: str, levels: int, per_level: int) -> dict:
+def score_task(task: str, levels: int, per_level: int, root: Path) -> dict:
     """Both algorithms' reports on the task's cohort."""
     from fastrl.runner.assessment import assess
 
     cohort = cohort_dir(task, levels, per_level)
     out = {}
     for algorithm in ("airl", "gail"):
-        run = irl_run(task, algorithm)
+        run = irl_run(task, algorithm, root)
         if run is None:
-            print(f"{task}: no {algorithm} run under runs/bench-irl/{task}: skipped")
+            print(f"{task}: no {algorithm} run under {root}/{task}: skipped")
             continue
-        result = assess([cohort], run=run, output=ROOT / task / algorithm / "scores.json", progress=False)
+        result = assess([cohort], run=run, output=ROOT / root.name / task / algorithm / "scores.json",
+                        progress=False)
         out[algorithm] = {"run": str(run), "report": result.report, "seconds": result.seconds}
     return out
 
@@ -69,6 +71,7 @@ def table(task: str, reports: dict) -> None:
     airl, gail = reports.get("airl", {}).get("report"), reports.get("gail", {}).get("report")
     base = airl or gail
     cols = [("heuristic", base, "heuristic"), ("r_psi (AIRL)", airl, "reward"), ("V_phi (AIRL)", airl, "value"),
+            ("h (AIRL)", airl, "potential"),
             ("r (GAIL)", gail, "reward"), ("V (GAIL)", gail, "value"), ("path length (m)", base, "path_length"),
             ("time (s)", base, "time")]
     cols = [c for c in cols if c[1] is not None]
@@ -87,17 +90,18 @@ def table(task: str, reports: dict) -> None:
         cells.append("-" if not r or r["kendall_tau_b"] is None else
                      f"{r['kendall_tau_b']:.2f} [{r['kendall_ci'][0]:.2f}, {r['kendall_ci'][1]:.2f}]")
     print("| Kendall tau-b vs level | " + " | ".join(cells) + " |")
-    print("| level means in order | " + " | ".join(
-        "yes" if rep["ranking"].get(key, {}).get("levels_in_order") else "no" for _, rep, key in cols) + " |")
+    print("| Kendall tau-b of the level means | " + " | ".join(
+        "-" if rep["ranking"].get(key, {}).get("kendall_tau_b_of_level_means") is None else
+        f"{rep['ranking'][key]['kendall_tau_b_of_level_means']:.2f}" for _, rep, key in cols) + " |")
 
 
-def timing(levels: int = 5, per_level: int = 20, rounds: int = 3) -> dict:
+def timing(root: Path, levels: int = 5, per_level: int = 20, rounds: int = 3) -> dict:
     """Seconds to score 100 TraceLines trajectories with the AIRL run (replay and networks included)."""
     from fastrl.assess.report import score_files, trajectory_files
     from fastrl.runner.assessment import load_scorer
 
     cohort = cohort_dir("tracelines", levels, per_level)
-    scorer, _ = load_scorer(irl_run("tracelines", "airl"), None)
+    scorer, _ = load_scorer(irl_run("tracelines", "airl", root), None)
     files = trajectory_files([cohort])
     best, steps = float("inf"), 0
     for _ in range(rounds):
@@ -116,15 +120,17 @@ def main() -> None:
     ap.add_argument("--per-level", type=int, default=10)
     ap.add_argument("--timing-only", action="store_true")
     ap.add_argument("--out", type=Path, default=Path("docs/assess_cohort.json"))
+    ap.add_argument("--irl-root", type=Path, default=Path("runs/bench-irl"),
+                    help="where bench/irl_tasks.py wrote its runs")
     args = ap.parse_args()
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load {os.getloadavg()[0]:.1f}")
     results = {}
     if not args.timing_only:
         for task in args.tasks:
-            results[task] = score_task(task, args.levels, args.per_level)
+            results[task] = score_task(task, args.levels, args.per_level, args.irl_root)
             table(task, results[task])
-    t = timing()
+    t = timing(args.irl_root)
     print(f"\nscoring {t['trajectories']} TraceLines trajectories ({t['samples']} samples, replay and networks "
           f"included): {t['seconds']:.2f} s ({t['samples_per_s']:,.0f} samples/s)")
     summary = {task: {alg: {"run": r["run"], "ranking": r["report"]["ranking"], "groups": r["report"]["groups"]}

@@ -13,7 +13,9 @@ from fastrl.assess.references import reference_scores
 from fastrl.assess.report import build_report, score_files
 from fastrl.assess.scoring import Scorer, normalise
 from fastrl.cli import app
-from fastrl.data.replay import expert_trajectories, rollout_trajectory
+from fastrl.data.replay import expert_trajectories, replay, rollout_trajectory
+from fastrl.data.trajectory import Trajectory
+from fastrl.irl.networks import load_networks
 from fastrl.spec import load_spec
 
 from .conftest import spec_file
@@ -175,7 +177,10 @@ def test_fastrl_score_with_a_run_writes_json_csv_figures_and_a_valid_recording(a
     assert len(report["trajectories"]) == 4 and len(report["problems"]) == 1
     row = report["trajectories"][0]
     assert row["reward"] is not None and row["value"] is not None and np.isfinite(row["reward_raw"])
-    assert {"reward", "value", "heuristic"} <= set(report["ranking"])
+    assert {"reward", "value", "potential", "heuristic"} <= set(report["ranking"])
+    nets = load_networks(airl_run / "networks")  # AIRL's value by its shaping potential: mean h over the states
+    obs, _, _ = replay(scorer.env, Trajectory.load(tmp_path / "in" / f"{row['file']}.npz"))
+    assert row["potential_raw"] == pytest.approx(float(nets.potential(obs).mean()), rel=1e-5)
     csv_lines = out.with_suffix(".csv").read_text().splitlines()
     assert len(csv_lines) == 5 and csv_lines[0].startswith("file,subject,skill")
     for png in ("scores_paths.png", "scores_deviation.png", "scores_distributions.png"):

@@ -27,7 +27,7 @@ def reference_trajectories(scorer: Scorer, episodes: int, seed: int = REFERENCE_
 def reference_scores(scorer: Scorer, episodes: int = 3, cache: Path | None = None) -> dict:
     """Mean scores of each reference; read from / written to `cache` (a JSON file) when given."""
     key = {"task_hash": task_hash(scorer.spec), "episodes": episodes, "learned": scorer.learned,
-           "reward_hash": _reward_identity(scorer)}
+           "reward_hash": _reward_identity(scorer), "scores": list(NORMALISED)}
     if cache is not None and cache.exists():
         try:
             saved = json.loads(cache.read_text())

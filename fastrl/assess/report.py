@@ -9,9 +9,9 @@ from pathlib import Path
 
 from ..data.trajectory import TrajectoryError
 from .ranking import rank_correlations, subject_table
-from .scoring import HIGHER_IS_BETTER, NORMALISED, Scorer, TrajectoryScores
+from .scoring import HIGHER_IS_BETTER, LEARNED, NORMALISED, SCORES, Scorer, TrajectoryScores
 
-COLUMNS = ("heuristic", "reward", "value", "subtasks", "path_length", "time", "smoothness")
+COLUMNS = SCORES
 TOUR_COLUMNS = ("economy", "safety", "contacts")  # abdomen scenes only
 
 
@@ -61,7 +61,7 @@ def group_key(rows: list[dict]) -> str:
 def build_report(scored: list[TrajectoryScores], references: dict, problems: list[str], learned: bool) -> dict:
     """Everything a reader or a machine needs: references, rows, groups, rankings, problems."""
     rows = [row(s) for s in scored]
-    keys = tuple(k for k in COLUMNS if learned or k not in ("reward", "value"))
+    keys = tuple(k for k in COLUMNS if k not in LEARNED or (learned and any(r[k] is not None for r in rows)))
     keys += tuple(k for k in TOUR_COLUMNS if rows and k in rows[0])
     by = group_key(rows) if rows else "subject"
     grouped = [{**r, "subject": f"level {r['skill']}" if by == "skill" else r["subject"]} for r in rows]

@@ -16,9 +16,11 @@ from ..spec.models import TaskSpec
 from .kinematic import log_dimensionless_jerk, path_length
 from .tour import tour_metrics
 
-SCORES = ("heuristic", "reward", "value", "subtasks", "path_length", "time", "smoothness")
-NORMALISED = ("heuristic", "reward", "value")  # 0 = random policy, 1 = scripted expert
-HIGHER_IS_BETTER = {"heuristic": True, "reward": True, "value": True, "subtasks": True, "path_length": False,
+SCORES = ("heuristic", "reward", "value", "potential", "subtasks", "path_length", "time", "smoothness")
+NORMALISED = ("heuristic", "reward", "value", "potential")  # 0 = random policy, 1 = scripted expert
+LEARNED = ("reward", "value", "potential")  # need a run's networks; potential: shaped AIRL only
+HIGHER_IS_BETTER = {"heuristic": True, "reward": True, "value": True, "potential": True, "subtasks": True,
+                    "path_length": False,
                     "time": False, "smoothness": True, "economy": False, "safety": True, "contacts": False}
 
 
@@ -93,7 +95,7 @@ class Scorer:
             "path_length": path_length(tip),
             "time": float(time[-1]),
             "smoothness": log_dimensionless_jerk(tip, time),
-            "reward": None, "value": None,
+            "reward": None, "value": None, "potential": None,
         }
         if self.anatomy is not None:
             scores.update(tour_metrics(tip, [i["contacts"] for i in infos], self.anatomy, self.spec.scene.radius))
@@ -102,6 +104,8 @@ class Scorer:
             scores["reward"] = float(self.networks.reward(obs).sum())
             values = self.networks.value(obs).astype(float)
             scores["value"] = float(values.mean())
+            if self.networks.has_potential:
+                scores["potential"] = float(self.networks.potential(obs).mean())
         meta = {**traj.meta, "success": bool(last["success"]), "subtasks_done": int(last["subtask"]),
                 "subtasks_total": int(last["subtasks_total"])}
         return TrajectoryScores(name or str(traj.meta.get("subject", "")), meta, scores, time, tip, values)

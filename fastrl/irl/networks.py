@@ -211,6 +211,11 @@ class Networks:
         return None if self._reward is None else self._reward.meta["kind"]
 
     @property
+    def has_potential(self) -> bool:
+        """Whether a shaped AIRL reward (with its potential h) was saved."""
+        return self._reward is not None and self._reward.meta["form"] == "state"
+
+    @property
     def identity(self) -> str:
         """Checksums of the saved value and reward tensors: changes whenever the networks do."""
         reward = "" if self._reward is None else self._reward.meta["sha256"][:16]
