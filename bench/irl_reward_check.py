@@ -1,13 +1,16 @@
 """Is the learned reward a reward? Spearman correlation of learned and heuristic returns over held-out rollouts.
 
     python bench/irl_reward_check.py runs/bench-irl/tracelines/*-airl-ppo-s0 [more run dirs] [--episodes 8]
+    python bench/irl_reward_check.py --from-json docs/irl_reward_check.json [more results or runs]
 
 For each run (GAIL or AIRL, with networks/ and checkpoints/): the untrained policy (same seed) and every saved
 checkpoint are rolled out deterministically on held-out seeds (20000, 20001, ...). Each rollout is scored by the
 spec's heuristic return (sum of w . phi) and by the learned reward saved in networks/reward.pt, loaded without
 pickle: AIRL r_psi(s), GAIL log D - log(1 - D), discounted with the generator's gamma plus the absorbing tail if
 the episode ended in success. Prints Spearman's rho over rollouts (and, for reference, with the undiscounted
-sum of learned rewards without the tail, and over per-policy mean returns) and writes a scatter figure.
+sum of learned rewards without the tail, and over per-policy mean returns), then, where a task and algorithm
+have runs of several training seeds, rho's mean ± sd over them; writes the results as JSON and a scatter figure
+(the lowest seed of each task and algorithm).
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
 import json
+import re
 import warnings
 from pathlib import Path
 
@@ -71,27 +75,58 @@ def check(run: Path, episodes: int) -> dict:
             "spearman_policy_means": float(rho_policy), "rows": rows}
 
 
+def training_seed(result: dict) -> int | None:
+    """The training seed from the run directory's name (...-s<seed>)."""
+    m = re.search(r"-s(\d+)$", result["run"].rstrip("/"))
+    return int(m.group(1)) if m else None
+
+
+def print_tables(results: list[dict]) -> None:
+    """One row per run; then, where a task and algorithm have several runs (seeds), mean ± sd over them."""
+    print("| task | algorithm | seed | policies x episodes | Spearman rho (learned return vs heuristic) | "
+          "rho, undiscounted sum without tail | rho of per-policy means |")
+    print("|---|---|---|---|---|---|---|")
+    for r in results:
+        print(f"| {r['task']} | {r['algorithm'].upper()} | {training_seed(r)} | {r['policies']} x "
+              f"{r['rollouts'] // r['policies']} | {r['spearman']:.3f} | {r['spearman_sum']:.3f} | "
+              f"{r['spearman_policy_means']:.3f} |")
+    groups: dict[tuple, list[dict]] = {}
+    for r in results:
+        groups.setdefault((r["task"], r["algorithm"]), []).append(r)
+    if all(len(g) == 1 for g in groups.values()):
+        return
+    print("\n| task | algorithm | seeds | rho, mean ± sd | per seed | runs at >= 0.8 |")
+    print("|---|---|---|---|---|---|")
+    for (task, algo), g in groups.items():
+        rhos = np.array([r["spearman"] for r in g])
+        per_seed = ", ".join(f"{r['spearman']:.2f}" for r in g)
+        print(f"| {task} | {algo.upper()} | {len(g)} | {rhos.mean():.2f} ± {rhos.std():.2f} | {per_seed} | "
+              f"{int((rhos >= 0.8).sum())} of {len(g)} |")
+
+
 def main() -> None:
-    """Check every run given, print the table, write JSON and a figure."""
+    """Check every run given (or read earlier results), print the tables, write JSON and a figure."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("runs", nargs="+", type=Path)
+    ap.add_argument("runs", nargs="*", type=Path)
     ap.add_argument("--episodes", type=int, default=8, help="held-out seeds per policy")
     ap.add_argument("--figure", default="docs/irl_reward_check.png")
+    ap.add_argument("--from-json", nargs="*", type=Path, default=[], metavar="JSON",
+                    help="also take the results an earlier call wrote beside its figure (no rollouts)")
     args = ap.parse_args()
-    results = [check(run, args.episodes) for run in args.runs]
-    print("| task | algorithm | policies x seeds | Spearman rho (learned return vs heuristic) | "
-          "rho, undiscounted sum without tail | rho of per-policy means |")
-    print("|---|---|---|---|---|---|")
-    for r in results:
-        print(f"| {r['task']} | {r['algorithm'].upper()} | {r['policies']} x {args.episodes} | {r['spearman']:.3f} | "
-              f"{r['spearman_sum']:.3f} | {r['spearman_policy_means']:.3f} |")
+    if not args.runs and not args.from_json:
+        ap.error("give run directories, or --from-json with earlier results")
+    results = [r for f in args.from_json for r in json.loads(f.read_text())]
+    results += [check(run, args.episodes) for run in args.runs]
+    results.sort(key=lambda r: (r["task"], r["algorithm"], training_seed(r) or 0))
+    print_tables(results)
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(results), figsize=(4.2 * len(results), 3.8), squeeze=False)
-    for ax, r in zip(axes[0], results):
+    shown = list({(r["task"], r["algorithm"]): r for r in reversed(results)}.values())[::-1]  # lowest seed each
+    fig, axes = plt.subplots(1, len(shown), figsize=(4.2 * len(shown), 3.8), squeeze=False)
+    for ax, r in zip(axes[0], shown):
         steps = np.array([x["policy_steps"] for x in r["rows"]])
         sc = ax.scatter([x["heuristic"] for x in r["rows"]], [x["learned"] for x in r["rows"]], c=steps, s=14,
                         cmap="viridis")
