@@ -43,24 +43,24 @@ def cohort_dir(task: str, levels: int, per_level: int) -> Path:
     return out
 
 
-def irl_run(task: str, algorithm: str, root: Path) -> Path | None:
-    """The newest inverse-RL run of bench/irl_tasks.py under root for a task and algorithm."""
-    found = sorted(Path(root, task).glob(f"*-{algorithm}-ppo-s0"))
+def irl_run(task: str, algorithm: str, root: Path, seed: int = 0) -> Path | None:
+    """The newest inverse-RL run of bench/irl_tasks.py under root for a task, algorithm and training seed."""
+    found = sorted(Path(root, task).glob(f"*-{algorithm}-ppo-s{seed}"))
     return found[-1] if found else None
 
 
-def score_task(task: str, levels: int, per_level: int, root: Path) -> dict:
+def score_task(task: str, levels: int, per_level: int, root: Path, seed: int = 0) -> dict:
     """Both algorithms' reports on the task's cohort."""
     from fastrl.runner.assessment import assess
 
     cohort = cohort_dir(task, levels, per_level)
     out = {}
     for algorithm in ("airl", "gail"):
-        run = irl_run(task, algorithm, root)
+        run = irl_run(task, algorithm, root, seed)
         if run is None:
             print(f"{task}: no {algorithm} run under {root}/{task}: skipped")
             continue
-        result = assess([cohort], run=run, output=ROOT / root.name / task / algorithm / "scores.json",
+        result = assess([cohort], run=run, output=ROOT / root.name / task / f"{algorithm}-s{seed}" / "scores.json",
                         progress=False)
         out[algorithm] = {"run": str(run), "report": result.report, "seconds": result.seconds}
     return out
@@ -95,13 +95,13 @@ def table(task: str, reports: dict) -> None:
         f"{rep['ranking'][key]['kendall_tau_b_of_level_means']:.2f}" for _, rep, key in cols) + " |")
 
 
-def timing(root: Path, levels: int = 5, per_level: int = 20, rounds: int = 3) -> dict:
+def timing(root: Path, seed: int = 0, levels: int = 5, per_level: int = 20, rounds: int = 3) -> dict:
     """Seconds to score 100 TraceLines trajectories with the AIRL run (replay and networks included)."""
     from fastrl.assess.report import score_files, trajectory_files
     from fastrl.runner.assessment import load_scorer
 
     cohort = cohort_dir("tracelines", levels, per_level)
-    scorer, _ = load_scorer(irl_run("tracelines", "airl", root), None)
+    scorer, _ = load_scorer(irl_run("tracelines", "airl", root, seed), None)
     files = trajectory_files([cohort])
     best, steps = float("inf"), 0
     for _ in range(rounds):
@@ -122,15 +122,16 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=Path("docs/assess_cohort.json"))
     ap.add_argument("--irl-root", type=Path, default=Path("runs/bench-irl"),
                     help="where bench/irl_tasks.py wrote its runs")
+    ap.add_argument("--seed", type=int, default=0, help="the inverse-RL runs' training seed")
     args = ap.parse_args()
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load {os.getloadavg()[0]:.1f}")
     results = {}
     if not args.timing_only:
         for task in args.tasks:
-            results[task] = score_task(task, args.levels, args.per_level, args.irl_root)
+            results[task] = score_task(task, args.levels, args.per_level, args.irl_root, args.seed)
             table(task, results[task])
-    t = timing(args.irl_root)
+    t = timing(args.irl_root, args.seed)
     print(f"\nscoring {t['trajectories']} TraceLines trajectories ({t['samples']} samples, replay and networks "
           f"included): {t['seconds']:.2f} s ({t['samples_per_s']:,.0f} samples/s)")
     summary = {task: {alg: {"run": r["run"], "ranking": r["report"]["ranking"], "groups": r["report"]["groups"]}
