@@ -2,7 +2,8 @@
 
     python bench/assess_cohort.py                  # 3 tasks x 5 levels x 10 trainees, GAIL and AIRL runs
     python bench/assess_cohort.py --tasks tracelines --timing-only
-    python bench/assess_cohort.py --irl-root runs/other-irl-runs --out /tmp/other.json   # other runs
+    python bench/assess_cohort.py --irl-root runs/other-irl-runs --seed 1 --out /tmp/s1.json   # other runs
+    python bench/assess_cohort.py --across docs/assess_cohort.json /tmp/s1.json   # level-means tau-b per seed
 
 For each task: a cohort (`fastrl cohort SPEC --levels 5 --per-level 10`, written once under
 runs/bench-assess/<task>/cohort) is scored with each inverse-RL run of bench/irl_tasks.py
@@ -95,6 +96,29 @@ def table(task: str, reports: dict) -> None:
         f"{rep['ranking'][key]['kendall_tau_b_of_level_means']:.2f}" for _, rep, key in cols) + " |")
 
 
+SCORED = (("heuristic", "airl", "heuristic"), ("r_psi (AIRL)", "airl", "reward"), ("V_phi (AIRL)", "airl", "value"),
+          ("h (AIRL)", "airl", "potential"), ("r (GAIL)", "gail", "reward"), ("V (GAIL)", "gail", "value"))
+
+
+def across_seeds(files: list[Path]) -> None:
+    """Per task and score, tau-b of the level means (per-trajectory tau-b) for each file written by a run of this
+    script, one training seed each."""
+    saved = [json.loads(f.read_text()) for f in files]
+    seeds = [next((a["run"].rsplit("-s", 1)[-1] for t in d["tasks"].values() for a in t.values()), "?")
+             for d in saved]
+    print("\n| task | score | " + " | ".join(f"seed {s}" for s in seeds) + " |")
+    print("|---|---|" + "---|" * len(seeds))
+    for task in TASKS:
+        for label, algorithm, key in SCORED:
+            cells = []
+            for d in saved:
+                r = d["tasks"].get(task, {}).get(algorithm, {}).get("ranking", {}).get(key)
+                cells.append("-" if not r or r["kendall_tau_b"] is None else
+                             f"{r['kendall_tau_b_of_level_means']:.2f} ({r['kendall_tau_b']:.2f})")
+            if any(c != "-" for c in cells):
+                print(f"| {task} | {label} | " + " | ".join(cells) + " |")
+
+
 def timing(root: Path, seed: int = 0, levels: int = 5, per_level: int = 20, rounds: int = 3) -> dict:
     """Seconds to score 100 TraceLines trajectories with the AIRL run (replay and networks included)."""
     from fastrl.assess.report import score_files, trajectory_files
@@ -123,7 +147,12 @@ def main() -> None:
     ap.add_argument("--irl-root", type=Path, default=Path("runs/bench-irl"),
                     help="where bench/irl_tasks.py wrote its runs")
     ap.add_argument("--seed", type=int, default=0, help="the inverse-RL runs' training seed")
+    ap.add_argument("--across", nargs="+", type=Path, metavar="JSON",
+                    help="only print tau-b of the level means per seed from files earlier calls wrote (--out)")
     args = ap.parse_args()
+    if args.across:
+        across_seeds(args.across)
+        return
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load {os.getloadavg()[0]:.1f}")
     results = {}
