@@ -21,6 +21,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
 import json
+import platform
 import re
 import warnings
 from pathlib import Path
@@ -115,6 +116,8 @@ def main() -> None:
     args = ap.parse_args()
     if not args.runs and not args.from_json:
         ap.error("give run directories, or --from-json with earlier results")
+    print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"load {os.getloadavg()[0]:.1f}")
     results = [r for f in args.from_json for r in json.loads(f.read_text())]
     results += [check(run, args.episodes) for run in args.runs]
     results.sort(key=lambda r: (r["task"], r["algorithm"], training_seed(r) or 0))
