@@ -36,13 +36,13 @@ def test_reservoir_keeps_a_uniform_sample_of_everything_added():
     assert len(drawn) == 500 and set(np.unique(drawn.obs)) <= set(range(10))
 
 
-@pytest.fixture(scope="module")
-def trained():
-    """Two rollouts of a tiny AIRL run whose observation normalisation is frozen at a mean of 3 and sd of 0.5."""
-    spec = load_spec(spec_file("tracelines"), TINY)
+def run_with_history(normalised: bool):
+    """Two rollouts of a tiny AIRL run; its observation normalisation, if any, frozen at a mean of 3 and sd of 0.5."""
+    spec = load_spec(spec_file("tracelines"), [*TINY, f"train.normalize.obs={str(normalised).lower()}"])
     expert = expert_transitions(fastrl.make(spec), expert_trajectories(fastrl.make(spec), range(2)))
     venv = make_vec_env(spec, 2, 0)
-    venv.obs_rms.mean[:], venv.obs_rms.var[:], venv.training = 3.0, 0.25, False
+    if normalised:
+        venv.obs_rms.mean[:], venv.obs_rms.var[:], venv.training = 3.0, 0.25, False
     model = build_model(spec, venv)
     cb = AdversarialCallback(Discriminator(venv.observation_space.shape[0], "airl", 0.99), expert, epochs=1,
                              batch_size=64, history=1000)
@@ -53,16 +53,25 @@ def trained():
     return venv, model, cb, fitted
 
 
-def test_history_holds_the_rollouts_raw_transitions(trained):
-    venv, model, cb, _ = trained
+@pytest.fixture(scope="module")
+def trained():
+    """run_with_history with observation normalisation."""
+    return run_with_history(True)
+
+
+@pytest.mark.parametrize("normalised", [True, False])
+def test_history_holds_the_rollouts_raw_transitions(trained, normalised):
+    venv, model, cb, _ = trained if normalised else run_with_history(False)
     assert cb.history.seen == 256 and len(cb.history) == 256
     buf = model.rollout_buffer  # PPO's train() flattened it env-major
     n, e = 64, 2
     seen = buf.observations.reshape(e, n, -1).swapaxes(0, 1)
+    norm = venv.normalize_obs if normalised else (lambda x: x)
     raw = np.stack(cb.raw_obs[:-1])
-    np.testing.assert_allclose(venv.normalize_obs(raw), seen, atol=1e-5)
+    assert not np.allclose(raw[1:], raw[:-1])  # the observations move
+    np.testing.assert_allclose(norm(raw), seen, atol=1e-5)
     raw_next = np.stack(cb.raw_next)
-    np.testing.assert_allclose(venv.normalize_obs(raw_next), np.stack(cb.next_obs), atol=1e-5)
+    np.testing.assert_allclose(norm(raw_next), np.stack(cb.next_obs), atol=1e-5)
 
 
 def test_terminal_observations_are_normalised_once(trained):

@@ -28,7 +28,8 @@ class AdversarialCallback(BaseCallback):
 
     def _on_rollout_start(self) -> None:
         self.next_obs, self.terminal, self.env_rewards = [], [], []
-        self.raw_obs = [np.array(current_original_obs(self.model), np.float32)] if self.history is not None else None
+        if self.history is not None:  # SB3 has not stepped yet: its _last_obs is the rollout's first observation
+            self.raw_obs = [np.array(current_original_obs(self.model, self.model._last_obs), np.float32)]
         self.raw_next = []
 
     def _on_step(self) -> bool:
@@ -43,7 +44,7 @@ class AdversarialCallback(BaseCallback):
         self.terminal.append(terminal)
         self.env_rewards.append(np.array(self.locals["rewards"], np.float32))
         if self.history is not None:
-            raw_new = np.array(current_original_obs(self.model), np.float32)  # after automatic resets
+            raw_new = np.array(current_original_obs(self.model, self.locals["new_obs"]), np.float32)
             self.raw_obs.append(raw_new)
             raw_next = raw_new.copy()
             raw_next[dones] = original_obs(self.model, new_obs[dones])

@@ -37,10 +37,10 @@ def original_obs(model: BaseAlgorithm, obs: np.ndarray) -> np.ndarray:
     return env.unnormalize_obs(obs) if isinstance(env, VecNormalize) else obs
 
 
-def current_original_obs(model: BaseAlgorithm) -> np.ndarray:
-    """The training envs' latest observations before normalisation (after any automatic reset)."""
+def current_original_obs(model: BaseAlgorithm, latest: np.ndarray) -> np.ndarray:
+    """The training envs' `latest` observations (after any automatic reset) before normalisation."""
     env = model.get_env()
-    return env.get_original_obs() if isinstance(env, VecNormalize) else model._last_obs
+    return env.get_original_obs() if isinstance(env, VecNormalize) else latest
 
 
 def transitions_batch(model: BaseAlgorithm, data: Transitions, disc: Discriminator, rows: np.ndarray | None = None
