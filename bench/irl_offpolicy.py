@@ -33,15 +33,16 @@ VARIANTS = {
     "no-current-rollout": ["irl.discriminator.spectral_norm=true", "irl.discriminator.current_rollout=false"],
     "no-spectral-norm": ["irl.discriminator.spectral_norm=false", "irl.discriminator.current_rollout=true"],
 }
-COMMON = ["train.algo=SAC", "train.sac.net_arch=[128, 128]", "train.sac.batch_size=256", "train.sac.learning_starts=5000", "irl.algorithm=airl",
-          "irl.discriminator.steps=16", "irl.discriminator.learning_rate=1e-3", "evaluate.periodic_episodes=10",
-          "train.checkpoint_every=50000", "train.keep_checkpoints=100", "evaluate.record_episodes=5"]
+COMMON = ["train.algo=SAC", "train.sac.net_arch=[128, 128]", "train.sac.batch_size=256",
+          "train.sac.learning_starts=5000", "irl.algorithm=airl", "irl.discriminator.steps=16",
+          "irl.discriminator.learning_rate=1e-3", "evaluate.periodic_episodes=10", "train.checkpoint_every=50000",
+          "train.keep_checkpoints=100", "evaluate.record_episodes=5"]
 SCHEDULES = {  # SAC schedules of bench/sac_speed.py
     # 8 envs, 32 steps each between 32 updates (1 update per 8 steps); the discriminator fits after every rollout
     "8x32": ["train.n_envs=8", "train.sac.train_freq=32", "train.sac.gradient_steps=32"],
     # stable-baselines3's own SAC and schedule (1 env, 1 update per step, [256, 256]), the same discriminator work
     "sb3": ["train.n_envs=1", "train.sac.train_freq=1", "train.sac.gradient_steps=1", "train.sac.net_arch=[256, 256]",
-            "train.sac.batch_size=256", "train.sac.lean_update=false", "irl.discriminator.every=256"],
+            "train.sac.lean_update=false", "irl.discriminator.every=256"],
     # 4 envs, 1 update per 4 steps; the discriminator fits every 256 steps on the samples since its last fit
     "4env-quarter": ["train.n_envs=4", "train.sac.train_freq=1", "train.sac.gradient_steps=1",
                      "irl.discriminator.every=256"],

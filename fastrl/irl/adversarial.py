@@ -30,7 +30,7 @@ class AdversarialCallback(BaseCallback):
         self.next_obs, self.terminal, self.env_rewards = [], [], []
         if self.history is not None:  # SB3 has not stepped yet: its _last_obs is the rollout's first observation
             self.raw_obs = [np.array(current_original_obs(self.model, self.model._last_obs), np.float32)]
-        self.raw_next = []
+            self.raw_next = []
 
     def _on_step(self) -> bool:
         new_obs = np.array(self.locals["new_obs"], dtype=np.float32)
