@@ -77,6 +77,23 @@ def test_the_tip_is_stopped_by_the_plate():
     assert u.data.cam_xpos[u.task.camera][2] > -0.001  # did not pass through
 
 
+def test_the_contact_observation_is_the_contact_feature_and_replays_identically():
+    env = fastrl.make(spec_file("imagecentring"), observation={"extra": ["contact"]})
+    obs, _ = env.reset(seed=3)
+    coords, seen, felt = [env.unwrapped.portal_coordinates()], [obs], []
+    for _ in range(200):  # keep inserting: the tip reaches a surface and presses on it
+        obs, _, _, _, info = env.step(5)
+        coords.append(env.unwrapped.portal_coordinates())
+        seen.append(obs)
+        felt.append(info["features"]["contact"])
+    assert [o[-1] for o in seen[1:]] == felt
+    assert 0 < sum(felt) < len(felt)  # free at first, then touching
+    replay = fastrl.make(spec_file("imagecentring"), observation={"extra": ["contact"]}).unwrapped
+    replay.reset(seed=3, options={"portal": coords[0]})
+    replayed = [replay.replay_step(q)[0] for q in coords[1:]]
+    np.testing.assert_allclose(replayed, seen[1:], atol=1e-9)
+
+
 def goal_pose(env, k=0):
     """Portal coordinates that satisfy subtask k's cues."""
     u = env.unwrapped

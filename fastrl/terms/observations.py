@@ -105,6 +105,12 @@ def portal_vel(s: TaskState) -> tuple:
     return s.portal_vel
 
 
+@term(size=1)
+def contact(s: TaskState) -> tuple:
+    """1 while the tip touches the shell or the plate, else 0: the contact feature as part of the state."""
+    return (1.0 if s.contacts else 0.0,)
+
+
 @term(size=3)
 def next_target(s: TaskState) -> tuple:
     """Position of the avatar after the current one (the current one if it is the last)."""
