@@ -31,15 +31,18 @@ ROOT = Path("runs/bench-assess")
 
 
 def cohort_dir(task: str, levels: int, per_level: int) -> Path:
-    """The cohort's folder, generated on first use."""
+    """The cohort's folder, generated on first use and again when the task's spec has changed."""
     from fastrl.data.cohort import make_cohort
-    from fastrl.spec import load_spec
+    from fastrl.data.trajectory import Trajectory
+    from fastrl.spec import load_spec, task_hash
 
+    spec = load_spec(f"specs/{task}.yaml")
     out = ROOT / task / f"cohort-{levels}x{per_level}"
-    if len(list(out.glob("*.npz"))) == levels * per_level:
+    files = sorted(out.glob("*.npz"))
+    if len(files) == levels * per_level and Trajectory.load(files[0]).meta.get("task_hash") == task_hash(spec):
         return out
     out.mkdir(parents=True, exist_ok=True)
-    for traj in make_cohort(load_spec(f"specs/{task}.yaml"), levels, per_level, seed=0):
+    for traj in make_cohort(spec, levels, per_level, seed=0):
         traj.save(out / f"{traj.meta['subject']}.npz")
     return out
 
