@@ -100,8 +100,9 @@ def report(args) -> None:
     print("|---|---|---|---|---|---|---|---|")
     for k, task in enumerate(TASKS):
         ax = fig.add_subplot(1, 3, k + 1)
-        for run_dir in sorted((Path(args.root) / task).glob("*/eval.json")):
-            run_dir = run_dir.parent
+        runs = sorted((f.parent for f in (Path(args.root) / task).glob("*/eval.json")),
+                      key=lambda d: (ALGOS.index(algo_of(d)), d.name))  # same order and colours in every panel
+        for run_dir in runs:
             algo = algo_of(run_dir)
             meta = json.loads((run_dir / "meta.json").read_text())
             ev = json.loads((run_dir / "eval.json").read_text())
@@ -124,7 +125,7 @@ def report(args) -> None:
             if algo == "bc":  # no training loop: its final evaluation, as a level
                 ax.axhline(row["final_subtasks"], color="black", ls="--", lw=1, label="BC (20 demos)")
             else:
-                ax.plot([0, *steps], [0, *subs], marker=".", label=algo.upper())
+                ax.plot([0, *steps], [0, *subs], marker=".", label=algo.upper(), color=f"C{ALGOS.index(algo)}")
         ax.axhline(0.9, color="grey", ls=":", lw=1)
         ax.set(title=task, xlabel="environment steps", ylabel="subtasks completed (10 eval seeds)", ylim=(-0.02, 1.02))
         ax.legend()
