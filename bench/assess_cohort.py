@@ -31,7 +31,7 @@ ROOT = Path("runs/bench-assess")
 
 
 def cohort_dir(task: str, levels: int, per_level: int) -> Path:
-    """The cohort's folder, generated on first use and again when the task's spec has changed."""
+    """The cohort's folder, generated on first use and again when the task's world (its task hash) has changed."""
     from fastrl.data.cohort import make_cohort
     from fastrl.data.trajectory import Trajectory
     from fastrl.spec import load_spec, task_hash
