@@ -10,24 +10,28 @@ from .discriminator import Discriminator, augment
 from .fitting import DiscriminatorFit, Transitions, make_batch
 from .generator import current_original_obs, original_obs, transitions_batch
 from .history import PolicyHistory
+from .scaling import ReturnScale
 
 
 class AdversarialCallback(BaseCallback):
     """After each PPO rollout: fit the discriminator (expert vs policy) and replace the rollout's rewards.
 
     With `history` > 0, each fit's policy side is the rollout plus as many transitions drawn from a reservoir of
-    that many earlier ones (raw observations, normalised and scored under the current policy when drawn)."""
+    that many earlier ones (raw observations, normalised and scored under the current policy when drawn).
+    With `scale_reward`, the generator's learned reward is divided by the running spread of its discounted return."""
 
     def __init__(self, disc: Discriminator, expert: Transitions, epochs: int = 2, batch_size: int = 256,
-                 lr: float = 3e-4, seed: int = 0, entropy: bool = True, history: int = 0):
+                 lr: float = 3e-4, seed: int = 0, entropy: bool = True, history: int = 0,
+                 scale_reward: bool = False):
         super().__init__()
         self.disc, self.expert, self.n_epochs, self.entropy = disc, expert, epochs, entropy
         self.fit = DiscriminatorFit(disc, lr, batch_size, seed)
         self.history = PolicyHistory(history, seed) if history else None
+        self.scale_reward, self.scale = scale_reward, None
         self.stats: dict[str, float] = {}
 
     def _on_rollout_start(self) -> None:
-        self.next_obs, self.terminal, self.env_rewards = [], [], []
+        self.next_obs, self.terminal, self.env_rewards, self.dones = [], [], [], []
         if self.history is not None:  # SB3 has not stepped yet: its _last_obs is the rollout's first observation
             self.raw_obs = [np.array(current_original_obs(self.model, self.model._last_obs), np.float32)]
             self.raw_next = []
@@ -42,6 +46,7 @@ class AdversarialCallback(BaseCallback):
                 terminal[i] = 0.0 if infos[i].get("TimeLimit.truncated", False) else 1.0
         self.next_obs.append(new_obs)
         self.terminal.append(terminal)
+        self.dones.append(np.array(dones, bool))
         self.env_rewards.append(np.array(self.locals["rewards"], np.float32))
         if self.history is not None:
             raw_new = np.array(current_original_obs(self.model, self.locals["new_obs"]), np.float32)
@@ -77,12 +82,16 @@ class AdversarialCallback(BaseCallback):
             t, lp = torch.as_tensor(term), torch.as_tensor(log_pi)
             reward = self.disc.generator_reward(s, s2, t, lp, self.entropy) + self.disc.terminal_bonus(t)
             learned = reward.numpy().reshape(n, e)
+        self.stats["irl/generator_reward"] = float(learned.mean())
+        if self.scale_reward:
+            self.scale = self.scale or ReturnScale(e, self.model.gamma)
+            learned = self.scale(learned, np.stack(self.dones))
+            self.stats["irl/generator_reward_scale"] = float(np.sqrt(self.scale.stats.var))
         bootstrap = buf.rewards - np.stack(self.env_rewards)  # SB3 adds gamma V(s_T) on truncation: keep it
         buf.rewards[:] = learned + bootstrap
         last_obs = torch.as_tensor(self.locals["new_obs"], dtype=torch.float32)
         with torch.no_grad():
             last_values = self.model.policy.predict_values(last_obs)
         buf.compute_returns_and_advantage(last_values=last_values, dones=self.locals["dones"])
-        self.stats["irl/generator_reward"] = float(learned.mean())
         for key, value in self.stats.items():
             self.logger.record(key, value)

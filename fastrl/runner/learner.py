@@ -115,5 +115,5 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
                                           d.learning_rate, spec.train.seed, d.every)
     else:
         cb = AdversarialCallback(disc, transitions, d.epochs, d.batch_size, d.learning_rate, spec.train.seed,
-                                 d.entropy, d.history)
+                                 d.entropy, d.history, d.scale_reward)
     return Learner(spec, venv, model, [cb], disc, demos)
