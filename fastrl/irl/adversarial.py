@@ -22,7 +22,7 @@ class AdversarialCallback(BaseCallback):
 
     def __init__(self, disc: Discriminator, expert: Transitions, epochs: int = 2, batch_size: int = 256,
                  lr: float = 3e-4, seed: int = 0, entropy: bool = True, history: int = 0,
-                 scale_reward: bool = False):
+                 scale_reward: bool = True):
         super().__init__()
         self.disc, self.expert, self.n_epochs, self.entropy = disc, expert, epochs, entropy
         self.fit = DiscriminatorFit(disc, lr, batch_size, seed)

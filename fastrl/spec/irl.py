@@ -42,9 +42,9 @@ class DiscriminatorSettings(Strict):
                                      "(null): on for PPO, off for SAC, whose squashed Gaussian gives the expert's "
                                      "saturated actions a log pi of hundreds, which decides D on its own")
     entropy: bool = Field(True, description="AIRL on PPO: the generator's reward keeps -log pi (max-entropy form)")
-    scale_reward: bool = Field(False, description="on-policy (PPO): divide the generator's learned reward by the "
+    scale_reward: bool = Field(True, description="on-policy (PPO): divide the generator's learned reward by the "
                                "running std of its discounted return (VecNormalize's reward scaling), so the critic's "
-                               "targets stay in range as the discriminator sharpens")
+                               "targets stay in range as the discriminator sharpens; false: the raw learned reward")
 
 
 class BehaviourCloning(Strict):
