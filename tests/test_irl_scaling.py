@@ -1,6 +1,7 @@
 """Scaling the generator's learned reward by the running spread of its discounted return."""
 
 import numpy as np
+import pytest
 
 import fastrl
 from fastrl.agents.sb3 import build_model, make_vec_env
@@ -64,3 +65,17 @@ def test_the_generator_gets_the_scaled_learned_reward():
     buf, ended = model.rollout_buffer.rewards, np.stack(cb.dones)  # SB3 adds gamma V(s_T) where an episode is cut
     assert ended.any() and buf.shape == scaled.shape
     np.testing.assert_allclose(buf[~ended], scaled[~ended], rtol=1e-5)
+
+
+@pytest.mark.parametrize(("algorithm", "setting", "expected"), [
+    ("airl", None, True), ("gail", None, False), ("airl", False, False), ("gail", True, True)])
+def test_scaling_defaults_on_for_airl_and_off_for_gail(tmp_path, algorithm, setting, expected):
+    from rich.console import Console
+
+    from fastrl.runner.learner import build_learner
+
+    sets = [*TINY, f"irl.algorithm={algorithm}", "irl.demonstrations.expert=1"]
+    if setting is not None:
+        sets.append(f"irl.discriminator.scale_reward={str(setting).lower()}")
+    learner = build_learner(load_spec(spec_file("tracelines"), sets), tmp_path, Console(quiet=True), progress=False)
+    assert learner.callbacks[0].scale_reward is expected
