@@ -18,16 +18,18 @@ class AdversarialCallback(BaseCallback):
 
     With `history` > 0, each fit's policy side is the rollout plus as many transitions drawn from a reservoir of
     that many earlier ones (raw observations, normalised and scored under the current policy when drawn).
-    With `scale_reward`, the generator's learned reward is divided by the running spread of its discounted return."""
+    With `scale_reward` (default: AIRL yes, GAIL no), the generator's learned reward is divided by the running spread
+    of its discounted return."""
 
     def __init__(self, disc: Discriminator, expert: Transitions, epochs: int = 2, batch_size: int = 256,
                  lr: float = 3e-4, seed: int = 0, entropy: bool = True, history: int = 0,
-                 scale_reward: bool = True):
+                 scale_reward: bool | None = None):
         super().__init__()
         self.disc, self.expert, self.n_epochs, self.entropy = disc, expert, epochs, entropy
         self.fit = DiscriminatorFit(disc, lr, batch_size, seed)
         self.history = PolicyHistory(history, seed) if history else None
-        self.scale_reward, self.scale = scale_reward, None
+        self.scale_reward = disc.kind == "airl" if scale_reward is None else scale_reward
+        self.scale: ReturnScale | None = None
         self.stats: dict[str, float] = {}
 
     def _on_rollout_start(self) -> None:

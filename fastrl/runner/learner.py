@@ -114,7 +114,6 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
         cb = OffPolicyAdversarialCallback(disc, transitions, d.current_rollout, d.steps, d.batch_size,
                                           d.learning_rate, spec.train.seed, d.every)
     else:
-        scale = irl.algorithm == "airl" if d.scale_reward is None else d.scale_reward
         cb = AdversarialCallback(disc, transitions, d.epochs, d.batch_size, d.learning_rate, spec.train.seed,
-                                 d.entropy, d.history, scale)
+                                 d.entropy, d.history, d.scale_reward)
     return Learner(spec, venv, model, [cb], disc, demos)
