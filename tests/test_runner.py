@@ -107,11 +107,18 @@ def test_same_seed_gives_the_same_evaluation(tmp_path):
     assert figures[0] == figures[1]
 
 
+def default_sigint() -> None:
+    """Undo an inherited SIG_IGN (a suite started in the background ignores SIGINT), so Ctrl-C reaches the CLI."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start_cli(args, cwd: Path) -> subprocess.Popen:
     """The real console script in a subprocess."""
     env = {**os.environ, "CI": "1", "MUJOCO_GL": "egl"}
     return subprocess.Popen([sys.executable, "-m", "fastrl.cli", *args], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=default_sigint)
+
 
 
 def wait_for(path: Path, proc: subprocess.Popen, timeout: float = 120.0) -> None:
