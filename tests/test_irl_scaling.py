@@ -37,7 +37,7 @@ def test_the_scale_is_the_spread_of_the_discounted_returns_and_ignores_the_rewar
     assert np.abs(ReturnScale(3, gamma=0.9, clip=0.1)(rewards, dones)).max() <= 0.1 + 1e-7
 
 
-def test_the_generator_gets_the_scaled_learned_reward():
+def test_the_generator_gets_the_scaled_learned_reward(monkeypatch):
     spec = load_spec(spec_file("tracelines"), TINY)
     expert = expert_transitions(fastrl.make(spec), expert_trajectories(fastrl.make(spec), range(2)))
     venv = make_vec_env(spec, 2, 0)
@@ -52,11 +52,8 @@ def test_the_generator_gets_the_scaled_learned_reward():
         seen.append((rewards.copy(), out.copy()))
         return out
 
-    ReturnScale.__call__ = spy
-    try:
-        model.learn(256, callback=cb)
-    finally:
-        ReturnScale.__call__ = real_scale
+    monkeypatch.setattr(ReturnScale, "__call__", spy)
+    model.learn(256, callback=cb)
     assert len(seen) == 2 and cb.scale.stats.count > 256  # both rollouts, every step of both envs
     raw, scaled = seen[-1]
     spread = cb.stats["irl/generator_reward_scale"]
