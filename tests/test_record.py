@@ -41,9 +41,9 @@ needs_x = pytest.mark.skipif(not (shutil.which("Xvfb") and shutil.which("xdotool
 
 @pytest.fixture(scope="module")
 def display():
-    """A private Xvfb display for the real viewer window."""
+    """A private Xvfb display for the real viewer window (-noreset: a killed last client must not reset it)."""
     n = next(n for n in range(91, 140) if not Path(f"/tmp/.X{n}-lock").exists())
-    proc = subprocess.Popen(["Xvfb", f":{n}", "-screen", "0", "1280x800x24", "-nolisten", "tcp"],
+    proc = subprocess.Popen(["Xvfb", f":{n}", "-screen", "0", "1280x800x24", "-nolisten", "tcp", "-noreset"],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     time.sleep(1.0)
     assert proc.poll() is None, "Xvfb did not start"
