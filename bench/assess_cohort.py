@@ -163,14 +163,19 @@ def main() -> None:
         for task in args.tasks:
             results[task] = score_task(task, args.levels, args.per_level, args.irl_root, args.seed)
             table(task, results[task])
-    t = timing(args.irl_root, args.seed)
-    print(f"\nscoring {t['trajectories']} TraceLines trajectories ({t['samples']} samples, replay and networks "
-          f"included): {t['seconds']:.2f} s ({t['samples_per_s']:,.0f} samples/s)")
+    t = None
+    if irl_run("tracelines", "airl", args.irl_root, args.seed) is None:
+        print(f"\nno TraceLines AIRL run under {args.irl_root} for seed {args.seed}: scoring time not measured")
+    else:
+        t = timing(args.irl_root, args.seed)
+        print(f"\nscoring {t['trajectories']} TraceLines trajectories ({t['samples']} samples, replay and networks "
+              f"included): {t['seconds']:.2f} s ({t['samples_per_s']:,.0f} samples/s)")
     summary = {task: {alg: {"run": r["run"], "ranking": r["report"]["ranking"], "groups": r["report"]["groups"]}
                       for alg, r in res.items()} for task, res in results.items()}
     saved = json.loads(args.out.read_text()) if args.out.exists() else {"tasks": {}}
     saved["tasks"].update(summary)
-    saved["timing"] = t
+    if t is not None:
+        saved["timing"] = t
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(saved, indent=2))
     print(f"wrote {args.out}")
