@@ -122,13 +122,16 @@ def across_seeds(files: list[Path]) -> None:
                 print(f"| {task} | {label} | " + " | ".join(cells) + " |")
 
 
-def timing(root: Path, seed: int = 0, levels: int = 5, per_level: int = 20, rounds: int = 3) -> dict:
-    """Seconds to score 100 TraceLines trajectories with the AIRL run (replay and networks included)."""
+def timing(root: Path, seed: int = 0, levels: int = 5, per_level: int = 20, rounds: int = 3) -> dict | None:
+    """Seconds to score 100 TraceLines trajectories with the AIRL run (replay and networks included); None: no run."""
     from fastrl.assess.report import score_files, trajectory_files
     from fastrl.runner.assessment import load_scorer
 
+    run = irl_run("tracelines", "airl", root, seed)
+    if run is None:
+        return None
     cohort = cohort_dir("tracelines", levels, per_level)
-    scorer, _ = load_scorer(irl_run("tracelines", "airl", root, seed), None)
+    scorer, _ = load_scorer(run, None)
     files = trajectory_files([cohort])
     best, steps = float("inf"), 0
     for _ in range(rounds):
@@ -163,11 +166,10 @@ def main() -> None:
         for task in args.tasks:
             results[task] = score_task(task, args.levels, args.per_level, args.irl_root, args.seed)
             table(task, results[task])
-    t = None
-    if irl_run("tracelines", "airl", args.irl_root, args.seed) is None:
+    t = timing(args.irl_root, args.seed)
+    if t is None:
         print(f"\nno TraceLines AIRL run under {args.irl_root} for seed {args.seed}: scoring time not measured")
     else:
-        t = timing(args.irl_root, args.seed)
         print(f"\nscoring {t['trajectories']} TraceLines trajectories ({t['samples']} samples, replay and networks "
               f"included): {t['seconds']:.2f} s ({t['samples_per_s']:,.0f} samples/s)")
     summary = {task: {alg: {"run": r["run"], "ranking": r["report"]["ranking"], "groups": r["report"]["groups"]}

@@ -11,9 +11,7 @@ from fastrl.irl.scaling import ReturnScale
 from fastrl.spec import load_spec
 
 from .conftest import spec_file
-
-TINY = ["train.normalize.reward=false", "train.n_envs=2", "train.ppo.n_steps=64", "train.ppo.batch_size=64",
-        "train.ppo.n_epochs=1", "episode.time_limit=2"]
+from .test_irl_history import TINY
 
 
 def stream(steps=500, envs=3, seed=0):
