@@ -94,6 +94,19 @@ def test_the_contact_observation_is_the_contact_feature_and_replays_identically(
     np.testing.assert_allclose(replayed, seen[1:], atol=1e-9)
 
 
+def test_the_elapsed_observation_counts_to_the_time_limit_and_restarts_at_reset():
+    env = fastrl.make(spec_file("tracelines"), observation={"extra": ["elapsed"]}, episode={"time_limit": 2})
+    obs, _ = env.reset(seed=0)
+    seen, done = [obs[-1]], False
+    while not done:
+        obs, _, term, trunc, _ = env.step(0)  # no-op: the scope holds still until the time limit
+        seen.append(obs[-1])
+        done = term or trunc
+    assert trunc and not term
+    np.testing.assert_allclose(seen, np.arange(len(seen)) / (len(seen) - 1), atol=1e-6)  # 0 at reset, 1 at the limit
+    assert env.reset(seed=1)[0][-1] == 0.0
+
+
 def goal_pose(env, k=0):
     """Portal coordinates that satisfy subtask k's cues."""
     u = env.unwrapped

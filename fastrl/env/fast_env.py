@@ -58,6 +58,7 @@ class FastEnv(gym.Env):
         self.state.fov = math.radians(spec.scope.fov_deg)
         self.state.portal_lo, self.state.portal_hi = tuple(ranges[:, 0].tolist()), tuple(ranges[:, 1].tolist())
         self.state.subtasks_total = len(self.task.targets)
+        self.state.time_limit = self.max_steps * self.dt
         self.lens, self.cable = self.task.lens_qadr, int(self.task.qadr[4])
         self._renderer = None
         self._positions_only = False

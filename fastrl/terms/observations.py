@@ -93,6 +93,12 @@ def subtask_fraction(s: TaskState) -> tuple:
     return (s.subtask / s.subtasks_total,)
 
 
+@term(size=1)
+def elapsed(s: TaskState) -> tuple:
+    """Share of the episode's time limit gone (0 to 1): with a time limit, the state says how much time is left."""
+    return (s.time / s.time_limit,)
+
+
 @term(size=5)
 def portal(s: TaskState) -> tuple:
     """Portal coordinates scaled to [-1, 1] over their ranges."""

@@ -7,7 +7,7 @@ class TaskState:
     """Everything the terms may read at one control step; the env fills it in place."""
 
     __slots__ = (
-        "time", "dt", "gamma",
+        "time", "time_limit", "dt", "gamma",
         "tip_pos", "tip_quat", "tip_vel", "tip_quat_rate", "tip_speed", "tip_accel",
         "cam_pos", "cam_fwd", "cam_up", "cam_right", "fov",
         "portal", "portal_vel", "portal_lo", "portal_hi",
@@ -21,7 +21,7 @@ class TaskState:
 
     def __init__(self):
         z3 = (0.0, 0.0, 0.0)
-        self.time, self.dt, self.gamma = 0.0, 0.05, 0.99
+        self.time, self.time_limit, self.dt, self.gamma = 0.0, 1.0, 0.05, 0.99
         self.tip_pos = self.tip_vel = self.tip_accel = self.cam_pos = z3
         self.tip_quat, self.tip_quat_rate = (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0)
         self.tip_speed = 0.0
