@@ -238,8 +238,8 @@ def test_a_target_behind_the_camera_is_not_centred():
 
 
 def test_duplicate_trocar_names_are_a_spec_error(tmp_path):
-    text = LIVER.read_text().replace("    - {name: umbilicus, azimuth: 180",
-                                     "    - {name: umbilicus, azimuth: 0, elevation: 70}\n    - {name: umbilicus, azimuth: 180")
+    first = "    - {name: umbilicus, azimuth: 180"
+    text = LIVER.read_text().replace(first, "    - {name: umbilicus, azimuth: 0, elevation: 70}\n" + first)
     path = tmp_path / "dup.yaml"
     path.write_text(text)
     with pytest.raises(SpecError, match=r"dup.yaml:16: scene.portals: portal names must be unique"):

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import rerun as rr
 
-from ..model.compiler import CompiledTask
 from ..model.abdomen import FLOOR_RGBA, TROCAR_RGBA, WALL_RGBA
 from ..model.anatomy import organ_mesh
+from ..model.compiler import CompiledTask
 from ..model.dome import PLATE_RGBA, PORTAL_RGBA, SHELL_RGBA
 from ..model.targets import LINE_RGBA
 from ..spec import geometry as geo

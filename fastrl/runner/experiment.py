@@ -1,4 +1,5 @@
-"""The paper's laparoscopic experiment: a graded cohort, inverse RL on its best, learned scores vs economy and safety."""
+"""The paper's laparoscopic experiment: a graded cohort, inverse RL on its best, learned scores against economy and
+safety."""
 
 from __future__ import annotations
 
