@@ -224,8 +224,8 @@ CASES = [
     Case(
         "unknown_observation_term",
         "periscoping",
-        "  stack: 1\n",
-        "  extra: [tip_pos, bogus]\n  stack: 1\n",
+        "  extra: [contact, elapsed]",
+        "  extra: [contact, bogus]",
         "extra:",
         "observation.extra.1",
         "unknown observation term 'bogus'",
