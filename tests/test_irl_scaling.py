@@ -70,6 +70,7 @@ def test_scaling_defaults_on_for_airl_and_off_for_gail(tmp_path, algorithm, sett
     from fastrl.runner.learner import build_learner
 
     value = "null" if setting is None else str(setting).lower()  # null: the default (the FAST specs set true)
-    sets = [*TINY, f"irl.algorithm={algorithm}", "irl.demonstrations.expert=1", f"irl.discriminator.scale_reward={value}"]
+    sets = [*TINY, f"irl.algorithm={algorithm}", "irl.demonstrations.expert=1",
+            f"irl.discriminator.scale_reward={value}"]
     learner = build_learner(load_spec(spec_file("tracelines"), sets), tmp_path, Console(quiet=True), progress=False)
     assert learner.callbacks[0].scale_reward is expected
