@@ -147,6 +147,34 @@ def test_airl_without_the_policy_term_ignores_log_pi():
 
 
 @pytest.mark.parametrize("kind", ["gail", "airl"])
+def test_a_discriminator_with_inputs_does_not_see_the_other_columns(kind):
+    disc = Discriminator(6, kind, 0.9, inputs=[0, 1, 2, 4])
+    first = next(m for m in disc.modules() if isinstance(m, torch.nn.Linear))
+    assert first.in_features == (5 if kind == "airl" else 10)  # 4 columns and the absorbing flag (twice for GAIL)
+    s, s2, term, lp = augment(torch.randn(8, 6)), augment(torch.randn(8, 6)), torch.zeros(8), torch.zeros(8)
+    moved, moved2 = s.clone(), s2.clone()
+    moved[:, [3, 5]] += 10.0
+    moved2[:, [3, 5]] -= 10.0
+    with torch.no_grad():
+        assert torch.allclose(disc.logits(s, s2, term, lp), disc.logits(moved, moved2, term, lp))
+        s[:, 4] += 10.0
+        assert not torch.allclose(disc.logits(s, s2, term, lp), disc.logits(moved, moved2, term, lp))
+    assert disc.config()["inputs"] == [0, 1, 2, 4] and Discriminator(6, kind, 0.9).config()["inputs"] is None
+
+
+def test_gail_ignores_the_clock_by_default_and_airl_sees_it():
+    gail = load_spec(spec_file("imagecentring"), ["irl.algorithm=gail"])
+    terms = gail.observation.terms()
+    assert terms[-1] == "elapsed" and gail.discriminator_inputs() == list(range(38))  # 39 columns, the last one
+    assert load_spec(spec_file("imagecentring"), ["irl.algorithm=airl"]).discriminator_inputs() is None
+    assert load_spec(spec_file("imagecentring"), ["irl.algorithm=gail", "irl.discriminator.ignore=[]"]
+                     ).discriminator_inputs() is None
+    stacked = load_spec(spec_file("imagecentring"), ["irl.algorithm=airl", "observation.stack=2",
+                                                     "irl.discriminator.ignore=[contact, elapsed]"])
+    assert stacked.discriminator_inputs() == [*range(37), *range(39, 76)]
+
+
+@pytest.mark.parametrize("kind", ["gail", "airl"])
 def test_absorbing_rows_train_only_the_absorbing_constants(kind):
     torch.manual_seed(0)
     disc = Discriminator(6, kind, 0.99, hidden=(16, 16), spectral=True)

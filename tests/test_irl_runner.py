@@ -59,6 +59,9 @@ def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
     assert disc["policy_term"] is ("train.algo=SAC" not in extra)  # AIRL on SAC: f alone by default
     rewards = nets.reward(obs)
     assert rewards.shape == (len(obs) - 1,) and np.isfinite(rewards).all()
+    late = obs.copy()
+    late[:, -1] = 0.9  # the observation's last term is the clock, `elapsed`
+    assert np.allclose(nets.reward(late), rewards) is (algorithm == "gail")  # GAIL's reward does not see it
     assert np.isfinite(nets.learned_return(obs, terminated=bool(infos[-1]["success"])))
     rows = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines()]
     keys = set().union(*rows)

@@ -380,3 +380,6 @@ def test_irl_section_errors_name_the_field(tmp_path):
     with pytest.raises(SpecError) as e:
         load_spec(SPECS / "tracelines.yaml", ["irl.discriminator.spectral=true"])
     assert "spectral_norm" in str(e.value)  # did you mean
+    with pytest.raises(SpecError) as e:
+        load_spec(SPECS / "tracelines.yaml", ["irl.discriminator.ignore=[elapsed, camera_position]"])
+    assert "irl.discriminator.ignore.1" in str(e.value) and "camera_position" in str(e.value)

@@ -5,6 +5,7 @@ in an absorbing state forever, so demonstrations and rollouts of different lengt
 (Kostrikov et al., "Discriminator-Actor-Critic"). Truncated episodes are bootstrapped by the generator.
 Each network's value at the absorbing state is a learned constant of its own, not the network evaluated at
 a made-up input: a spectrally normalised network could not tell that input from ordinary states.
+With `inputs`, the networks see only those observation columns (and the flag); the policy still sees all.
 """
 
 from __future__ import annotations
@@ -42,12 +43,15 @@ class Discriminator(nn.Module):
     """Logits of 'expert' for transitions (s, s', terminal, log pi(a|s)) of augmented states; state-only rewards."""
 
     def __init__(self, obs_dim: int, kind: Literal["gail", "airl"], gamma: float, hidden=(64, 64),
-                 spectral: bool = False, absorbing: bool = True, shaped: bool = True, policy_term: bool = True):
+                 spectral: bool = False, absorbing: bool = True, shaped: bool = True, policy_term: bool = True,
+                 inputs: list[int] | None = None):
         super().__init__()
         self.obs_dim, self.kind, self.gamma, self.policy_term = obs_dim, kind, gamma, policy_term
         self.hidden, self.spectral, self.absorbing = tuple(hidden), spectral, absorbing
         self.shaped = kind == "airl" and shaped  # AIRL's shaped form; else one network on (s, s')
-        width = obs_dim + 1
+        self.inputs = None if inputs is None else [int(i) for i in inputs]
+        self.register_buffer("_columns", None if inputs is None else torch.tensor([*self.inputs, obs_dim]))
+        width = (obs_dim if inputs is None else len(self.inputs)) + 1
         if self.shaped:
             self.r_psi = mlp(width, self.hidden, sn=spectral)   # the reward kept for scoring
             self.h = mlp(width, self.hidden, sn=spectral)       # the shaping potential
@@ -61,14 +65,19 @@ class Discriminator(nn.Module):
         """The network's output on real states, the constant on absorbing ones."""
         return (1.0 - flag) * net_out.squeeze(-1) + flag * constant
 
+    def _seen(self, s: torch.Tensor) -> torch.Tensor:
+        """The columns of augmented states the networks see (all without `inputs`)."""
+        return s if self._columns is None else s.index_select(-1, self._columns)
+
     def _r(self, s):
-        return self._masked(self.r_psi(s), s[..., -1], self.r_absorbing)
+        return self._masked(self.r_psi(self._seen(s)), s[..., -1], self.r_absorbing)
 
     def _h(self, s):
-        return self._masked(self.h(s), s[..., -1], self.h_absorbing)
+        return self._masked(self.h(self._seen(s)), s[..., -1], self.h_absorbing)
 
     def _net(self, s, s2):
-        return self._masked(self.net(torch.cat([s, s2], dim=-1)), s[..., -1], self.r_absorbing)
+        return self._masked(self.net(torch.cat([self._seen(s), self._seen(s2)], dim=-1)), s[..., -1],
+                            self.r_absorbing)
 
     def f(self, s, s2, terminal):
         """AIRL's f: shaped r_psi(s) + gamma h(s') - h(s) (terminal potential 0 without absorbing), or net(s, s')."""
@@ -117,4 +126,4 @@ class Discriminator(nn.Module):
         """What rebuilds this discriminator (for pickle-free saving)."""
         return {"obs_dim": self.obs_dim, "kind": self.kind, "gamma": self.gamma, "hidden": list(self.hidden),
                 "spectral": self.spectral, "absorbing": self.absorbing, "shaped": self.shaped,
-                "policy_term": self.policy_term}
+                "policy_term": self.policy_term, "inputs": self.inputs}

@@ -175,6 +175,9 @@ class Networks:
         for key in ("gamma", "absorbing", "absorbing_value", "absorbing_reward"):
             if key not in loaded.meta:
                 raise ValueError(f"{loaded.path}: missing key {key!r}")
+        inputs = loaded.meta.get("inputs")
+        if inputs is not None and not (isinstance(inputs, list) and all(type(i) is int and i >= 0 for i in inputs)):
+            raise ValueError(f"{loaded.path}: inputs must be a list of observation columns, got {inputs!r}")
         return loaded
 
     def policy(self, obs: np.ndarray) -> np.ndarray:
@@ -227,8 +230,10 @@ class Networks:
         return float(self._reward_pair().meta["gamma"])
 
     def _states(self, r: Loaded, obs: np.ndarray) -> torch.Tensor:
-        """Normalised observations with a zero absorbing flag appended."""
+        """Normalised observations, the columns the reward saw (all if not saved), with a zero absorbing flag."""
         x = r.norm(obs)
+        if r.meta.get("inputs") is not None:
+            x = x[:, r.meta["inputs"]]
         return torch.cat([x, torch.zeros_like(x[:, :1])], dim=-1)
 
     def reward(self, obs: np.ndarray) -> np.ndarray:

@@ -108,7 +108,8 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     d = irl.discriminator
     obs_dim = venv.observation_space.shape[0]
     disc = Discriminator(obs_dim, irl.algorithm, spec.train.params().gamma, tuple(d.hidden), d.spectral_norm,
-                         d.absorbing, d.shaped, not off_policy if d.policy_term is None else d.policy_term)
+                         d.absorbing, d.shaped, not off_policy if d.policy_term is None else d.policy_term,
+                         spec.discriminator_inputs())
     transitions = expert_transitions(FastEnv(spec), demos)
     if off_policy:
         cb = OffPolicyAdversarialCallback(disc, transitions, d.current_rollout, d.steps, d.batch_size,

@@ -37,6 +37,10 @@ class DiscriminatorSettings(Strict):
                          "transitions and add as many of them as the rollout has to each fit's policy side, so the "
                          "learned reward keeps rating what earlier policies did low; 0: the rollout alone")
     absorbing: bool = Field(True, description="terminated episodes continue in an absorbing state")
+    ignore: list[str] | None = Field(None, description="observation terms the discriminator does not see (the "
+                                     "policy still does). Default (null): GAIL ignores `elapsed`, AIRL sees all. "
+                                     "With the clock in its input, GAIL's non-negative reward is about 0 on every "
+                                     "state later than the expert's, however far the task has come")
     shaped: bool = Field(True, description="AIRL: f = r_psi(s) + gamma h(s') - h(s); false: the standard f(s, s')")
     policy_term: bool | None = Field(None, description="AIRL: D's logit is f - log pi(a|s); false: f alone. Default "
                                      "(null): on for PPO, off for SAC, whose squashed Gaussian gives the expert's "

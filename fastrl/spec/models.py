@@ -231,6 +231,10 @@ class TaskSpec(Strict):
             _fail("train.algo", "SAC needs continuous actions: set actions.mode: continuous (or rates)")
         if self.irl.algorithm == "bc" and self.train.algo != "PPO":
             _fail("irl.algorithm", "behavioural cloning trains the PPO policy: set train.algo: PPO")
+        observed = self.observation.terms()
+        _raise([(("irl", "discriminator", "ignore", i),
+                 f"'{name}' is not observed (observation terms: {', '.join(observed)})", name)
+                for i, name in enumerate(self.irl.discriminator.ignore or []) if name not in observed])
         names = [p.name for p in self.scene.portals]
         if self.scope.portal not in names:
             _fail("scope.portal", f"no portal named '{self.scope.portal}' (portals: {', '.join(names)})")
@@ -261,6 +265,19 @@ class TaskSpec(Strict):
                     errors.append((("task", "line", "points", i), problem, list(xy)))
         _raise(errors)
         return self
+
+    def discriminator_inputs(self) -> list[int] | None:
+        """Observation columns the discriminator sees (every frame of a stack); None: all of them."""
+        ignore = self.irl.discriminator.ignore
+        if ignore is None:
+            ignore = ["elapsed"] if self.irl.algorithm == "gail" else []
+        names = self.observation.terms()
+        if not set(ignore) & set(names):
+            return None
+        sizes = [OBSERVATION_TERMS[n].size for n in names]
+        starts = np.cumsum([0, *sizes])
+        frame = [int(c) for n, a, b in zip(names, starts, starts[1:]) if n not in ignore for c in range(a, b)]
+        return [k * int(starts[-1]) + c for k in range(self.observation.stack) for c in frame]
 
     def portal(self) -> Portal:
         """The portal the scope goes through."""
