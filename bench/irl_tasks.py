@@ -128,6 +128,7 @@ def report(args) -> None:
                 ax.plot([0, *steps], [0, *subs], marker=".", label=algo.upper(), color=f"C{ALGOS.index(algo)}")
         ax.axhline(0.9, color="grey", ls=":", lw=1)
         ax.set(title=task, xlabel="environment steps", ylabel="subtasks completed (10 eval seeds)", ylim=(-0.02, 1.02))
+        ax.xaxis.set_major_formatter(lambda x, _: f"{x / 1e6:g}M" if x >= 1e6 else f"{x / 1e3:g}k" if x else "0")
         ax.legend()
     fig.tight_layout()
     out = Path(args.figure)
