@@ -107,3 +107,16 @@ def test_run_with_an_irl_section_resumes_with_its_discriminator(tmp_path):
     res = CliRunner().invoke(app, ["run", "--resume", str(run), "--timesteps", "512", "--no-progress"])
     assert res.exit_code == 0, res.output
     assert json.loads((run / "meta.json").read_text())["trained_timesteps"] >= 512
+
+
+def test_resuming_with_a_discriminator_the_spec_no_longer_builds_is_a_clear_error(tmp_path):
+    res = invoke(["run", str(spec_file("tracelines")), "--timesteps", "256",
+                  *sets(["irl.algorithm=gail", "irl.discriminator.ignore=[]"])], tmp_path)
+    assert res.exit_code == 0, res.output
+    run = only_run(tmp_path)
+    spec = (run / "spec.yaml").read_text()
+    assert "ignore: []" in spec
+    (run / "spec.yaml").write_text(spec.replace("ignore: []", "ignore: null"))  # GAIL's default: no clock
+    res = CliRunner().invoke(app, ["run", "--resume", str(run), "--timesteps", "512", "--no-progress"])
+    assert res.exit_code == 2 and "parts.pt" in res.output and "does not fit" in res.output, res.output
+    assert res.exception is None or isinstance(res.exception, SystemExit)

@@ -96,13 +96,21 @@ def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict,
     return path
 
 
+class CheckpointMismatch(ValueError):
+    """A checkpoint whose tensors do not fit the model the run's spec builds."""
+
+
 def load_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv | None, parts: dict | None = None) -> dict:
     """Restore what save_checkpoint wrote into a freshly built model (and its VecNormalize, and parts)."""
     tensors = torch.load(path / "weights.pt", map_location="cpu", weights_only=True)
     if parts:
         saved = torch.load(path / "parts.pt", map_location="cpu", weights_only=True)
         for name, part in parts.items():
-            part.load_state_dict(saved[name])
+            try:
+                part.load_state_dict(saved[name])
+            except RuntimeError as e:  # shapes differ: the spec no longer builds what was saved
+                raise CheckpointMismatch(f"{path / 'parts.pt'}: the saved {name} does not fit what the run's "
+                                         f"spec builds now ({str(e).splitlines()[-1].strip()})") from e
     model.policy.load_state_dict(tensors["policy"])
     for name, opt in _optimizers(model).items():
         opt.load_state_dict(tensors["optimizers"][name])

@@ -246,6 +246,7 @@ def irl(
 def train_and_report(spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool,
                      timesteps: int | None) -> None:
     """Start (or resume) a run, turn interruptions and bad input into messages, print the evaluation."""
+    from ..agents.sb3 import CheckpointMismatch
     from ..runner import EvaluationInterrupted, RunInterrupted, resume_run, start_run
 
     try:
@@ -270,7 +271,7 @@ def train_and_report(spec: Path | None, overrides: list[str], resume: Path | Non
         err.print(f"evaluation interrupted; the trained policy is saved in {stop.run}/final", markup=False)
         err.print(f"evaluate it with: fastrl eval {stop.run}", markup=False)
         raise typer.Exit(code=130) from None
-    except (SpecError, FileNotFoundError) as e:
+    except (SpecError, FileNotFoundError, CheckpointMismatch) as e:
         exit_with(e)
     results = json.loads((run_dir / "eval.json").read_text())
     print_eval(results)

@@ -50,7 +50,8 @@ class Discriminator(nn.Module):
         self.hidden, self.spectral, self.absorbing = tuple(hidden), spectral, absorbing
         self.shaped = kind == "airl" and shaped  # AIRL's shaped form; else one network on (s, s')
         self.inputs = None if inputs is None else [int(i) for i in inputs]
-        self.register_buffer("_columns", None if inputs is None else torch.tensor([*self.inputs, obs_dim]))
+        columns = None if inputs is None else torch.tensor([*self.inputs, obs_dim])
+        self.register_buffer("_columns", columns, persistent=False)
         width = (obs_dim if inputs is None else len(self.inputs)) + 1
         if self.shaped:
             self.r_psi = mlp(width, self.hidden, sn=spectral)   # the reward kept for scoring
