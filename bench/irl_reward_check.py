@@ -128,8 +128,12 @@ def main() -> None:
     import matplotlib.pyplot as plt
 
     shown = list({(r["task"], r["algorithm"]): r for r in reversed(results)}.values())[::-1]  # lowest seed each
-    fig, axes = plt.subplots(1, len(shown), figsize=(4.2 * len(shown), 3.8), squeeze=False)
-    for ax, r in zip(axes[0], shown):
+    cols = min(len(shown), 3)
+    rows = -(-len(shown) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.8 * rows), squeeze=False)
+    for ax in axes.flat[len(shown):]:
+        ax.set_visible(False)
+    for ax, r in zip(axes.flat, shown):
         steps = np.array([x["policy_steps"] for x in r["rows"]])
         sc = ax.scatter([x["heuristic"] for x in r["rows"]], [x["learned"] for x in r["rows"]], c=steps, s=14,
                         cmap="viridis")
