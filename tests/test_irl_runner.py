@@ -120,3 +120,4 @@ def test_resuming_with_a_discriminator_the_spec_no_longer_builds_is_a_clear_erro
     res = CliRunner().invoke(app, ["run", "--resume", str(run), "--timesteps", "512", "--no-progress"])
     assert res.exit_code == 2 and "parts.pt" in res.output and "does not fit" in res.output, res.output
     assert res.exception is None or isinstance(res.exception, SystemExit)
+    assert (run / "recording.rrd").exists() and not list(run.glob("recording.part*.rrd"))  # nothing moved
