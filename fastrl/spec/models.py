@@ -271,13 +271,9 @@ class TaskSpec(Strict):
         ignore = self.irl.discriminator.ignore
         if ignore is None:
             ignore = ["elapsed"] if self.irl.algorithm == "gail" else []
-        names = self.observation.terms()
-        if not set(ignore) & set(names):
-            return None
-        sizes = [OBSERVATION_TERMS[n].size for n in names]
-        starts = np.cumsum([0, *sizes])
-        frame = [int(c) for n, a, b in zip(names, starts, starts[1:]) if n not in ignore for c in range(a, b)]
-        return [k * int(starts[-1]) + c for k in range(self.observation.stack) for c in frame]
+        column_terms = [n for n in self.observation.terms() for _ in range(OBSERVATION_TERMS[n].size)]
+        keep = [i for i, n in enumerate(column_terms * self.observation.stack) if n not in ignore]
+        return None if len(keep) == len(column_terms) * self.observation.stack else keep
 
     def portal(self) -> Portal:
         """The portal the scope goes through."""
