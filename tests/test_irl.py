@@ -162,6 +162,30 @@ def test_a_discriminator_with_inputs_does_not_see_the_other_columns(kind):
     assert disc.config()["inputs"] == [0, 1, 2, 4] and Discriminator(6, kind, 0.9).config()["inputs"] is None
 
 
+def test_airl_reward_inputs_leave_columns_out_of_r_psi_but_not_of_h():
+    disc = Discriminator(6, "airl", 0.9, reward_inputs=[0, 1, 2, 3, 4])
+    s = augment(torch.randn(8, 6))
+    late = s.clone()
+    late[:, 5] += 10.0  # the column r_psi does not see
+    with torch.no_grad():
+        assert torch.allclose(disc.reward(s), disc.reward(late))
+        assert not torch.allclose(disc.potential(s), disc.potential(late))
+        s[:, 4] += 10.0
+        assert not torch.allclose(disc.reward(s), disc.reward(late))
+    assert disc.config()["reward_inputs"] == [0, 1, 2, 3, 4] and disc.config()["inputs"] is None
+    assert Discriminator(6, "airl", 0.9, inputs=[0, 1]).config()["reward_inputs"] == [0, 1]  # default: inputs
+
+
+def test_reward_ignore_narrows_the_discriminator_inputs_for_r_psi():
+    airl = load_spec(spec_file("tracelines"), ["irl.algorithm=airl", "irl.discriminator.reward_ignore=[elapsed]"])
+    assert airl.discriminator_inputs() is None and airl.reward_inputs() == list(range(38))
+    both = load_spec(spec_file("tracelines"), ["irl.algorithm=airl", "irl.discriminator.ignore=[contact]",
+                                               "irl.discriminator.reward_ignore=[elapsed]"])
+    assert both.discriminator_inputs() == [*range(37), 38] and both.reward_inputs() == list(range(37))
+    plain = load_spec(spec_file("tracelines"), ["irl.algorithm=airl", "irl.discriminator.reward_ignore=[]"])
+    assert plain.reward_inputs() is None
+
+
 def test_gail_ignores_the_clock_by_default_and_airl_sees_it():
     gail = load_spec(spec_file("imagecentring"), ["irl.algorithm=gail"])
     terms = gail.observation.terms()

@@ -59,10 +59,12 @@ def sac_run():
     return trained(SAC_TINY)
 
 
-def spectral_disc(obs_dim: int, kind: str, absorbing: bool = True, shaped: bool = True) -> Discriminator:
+def spectral_disc(obs_dim: int, kind: str, absorbing: bool = True, shaped: bool = True, inputs=None,
+                  reward_inputs=None) -> Discriminator:
     """A spectrally normalised discriminator after a few training steps (weights and power iterates moved)."""
     torch.manual_seed(1)
-    disc = Discriminator(obs_dim, kind, GAMMA, hidden=(16, 16), spectral=True, absorbing=absorbing, shaped=shaped)
+    disc = Discriminator(obs_dim, kind, GAMMA, hidden=(16, 16), spectral=True, absorbing=absorbing, shaped=shaped,
+                         inputs=inputs, reward_inputs=reward_inputs)
     opt = torch.optim.Adam(disc.parameters(), lr=1e-2)
     for _ in range(5):
         a = absorbing_states(4, obs_dim)  # absorbing rows train the absorbing constants away from 0
@@ -131,6 +133,23 @@ def test_airl_reward_and_potential_match_the_spectral_discriminator(ppo_run, tmp
         np.testing.assert_allclose(nets.potential(obs), disc.potential(s).numpy(), atol=1e-5)
     assert nets.reward(obs).shape == (len(obs) - 1,)
     assert nets.kind == "airl" and nets.gamma == GAMMA
+
+
+def test_a_saved_reward_keeps_the_columns_r_psi_and_h_saw(ppo_run, tmp_path):
+    model, venv, obs = ppo_run
+    d = obs.shape[1]
+    disc = spectral_disc(d, "airl", inputs=list(range(1, d)), reward_inputs=list(range(1, d - 1)))
+    save_networks(tmp_path, model, venv, disc, GAMMA)
+    disc.eval()
+    nets = load_networks(tmp_path)
+    s = normalized_states(venv, obs)
+    with torch.no_grad():
+        np.testing.assert_allclose(nets.reward(obs), disc.reward(s[:-1]).numpy(), atol=1e-5)
+        np.testing.assert_allclose(nets.potential(obs), disc.potential(s).numpy(), atol=1e-5)
+    moved = obs.copy()
+    moved[:, -1] += 1.0  # seen by h only
+    assert np.allclose(nets.reward(moved), nets.reward(obs)) and not np.allclose(nets.potential(moved),
+                                                                                 nets.potential(obs))
 
 
 @pytest.mark.parametrize("kind", ["gail", "airl"])
@@ -221,6 +240,8 @@ CORRUPTIONS = {
                           ValueError, "value.json"),
     "unknown output": (lambda d: _edit_json(d, "policy", lambda m: m.update({"output": "sample"})), ValueError,
                        "policy.json"),
+    "bad reward columns": (lambda d: _edit_json(d, "reward", lambda m: m.update({"reward_inputs": [0, -1]})),
+                           ValueError, "reward.json.*reward_inputs"),
     "not JSON": (lambda d: (d / "value.json").write_text("{oops"), ValueError, "value.json"),
     "missing json": (lambda d: (d / "value.json").unlink(), FileNotFoundError, "value.json"),
     "missing .pt": (lambda d: (d / "reward.pt").unlink(), FileNotFoundError, "reward.pt"),

@@ -115,8 +115,8 @@ def test_resuming_with_a_discriminator_the_spec_no_longer_builds_is_a_clear_erro
     assert res.exit_code == 0, res.output
     run = only_run(tmp_path)
     spec = (run / "spec.yaml").read_text()
-    assert "ignore: []" in spec
-    (run / "spec.yaml").write_text(spec.replace("ignore: []", "ignore: null"))  # GAIL's default: no clock
+    assert "\n    ignore: []" in spec
+    (run / "spec.yaml").write_text(spec.replace("\n    ignore: []", "\n    ignore: null"))  # GAIL's default: no clock
     res = CliRunner().invoke(app, ["run", "--resume", str(run), "--timesteps", "512", "--no-progress"])
     assert res.exit_code == 2 and "parts.pt" in res.output and "does not fit" in res.output, res.output
     assert res.exception is None or isinstance(res.exception, SystemExit)

@@ -383,3 +383,6 @@ def test_irl_section_errors_name_the_field(tmp_path):
     with pytest.raises(SpecError) as e:
         load_spec(SPECS / "tracelines.yaml", ["irl.discriminator.ignore=[elapsed, camera_position]"])
     assert "irl.discriminator.ignore.1" in str(e.value) and "camera_position" in str(e.value)
+    with pytest.raises(SpecError) as e:
+        load_spec(SPECS / "tracelines.yaml", ["irl.discriminator.reward_ignore=[clock]"])
+    assert "irl.discriminator.reward_ignore.0" in str(e.value) and "'clock' is not observed" in str(e.value)

@@ -6,6 +6,7 @@ in an absorbing state forever, so demonstrations and rollouts of different lengt
 Each network's value at the absorbing state is a learned constant of its own, not the network evaluated at
 a made-up input: a spectrally normalised network could not tell that input from ordinary states.
 With `inputs`, the networks see only those observation columns (and the flag); the policy still sees all.
+With `reward_inputs`, shaped AIRL's r_psi sees only those (h still sees `inputs`).
 """
 
 from __future__ import annotations
@@ -44,17 +45,19 @@ class Discriminator(nn.Module):
 
     def __init__(self, obs_dim: int, kind: Literal["gail", "airl"], gamma: float, hidden=(64, 64),
                  spectral: bool = False, absorbing: bool = True, shaped: bool = True, policy_term: bool = True,
-                 inputs: list[int] | None = None):
+                 inputs: list[int] | None = None, reward_inputs: list[int] | None = None):
         super().__init__()
         self.obs_dim, self.kind, self.gamma, self.policy_term = obs_dim, kind, gamma, policy_term
         self.hidden, self.spectral, self.absorbing = tuple(hidden), spectral, absorbing
         self.shaped = kind == "airl" and shaped  # AIRL's shaped form; else one network on (s, s')
         self.inputs = None if inputs is None else [int(i) for i in inputs]
-        columns = None if inputs is None else torch.tensor([*self.inputs, obs_dim])
-        self.register_buffer("_columns", columns, persistent=False)
+        self.reward_inputs = self.inputs if reward_inputs is None else [int(i) for i in reward_inputs]
+        for name, cols in (("_columns", self.inputs), ("_reward_columns", self.reward_inputs)):
+            self.register_buffer(name, None if cols is None else torch.tensor([*cols, obs_dim]), persistent=False)
         width = (obs_dim if inputs is None else len(self.inputs)) + 1
         if self.shaped:
-            self.r_psi = mlp(width, self.hidden, sn=spectral)   # the reward kept for scoring
+            reward_width = (obs_dim if self.reward_inputs is None else len(self.reward_inputs)) + 1
+            self.r_psi = mlp(reward_width, self.hidden, sn=spectral)   # the reward kept for scoring
             self.h = mlp(width, self.hidden, sn=spectral)       # the shaping potential
             self.h_absorbing = nn.Parameter(torch.zeros(()))
         else:
@@ -66,12 +69,13 @@ class Discriminator(nn.Module):
         """The network's output on real states, the constant on absorbing ones."""
         return (1.0 - flag) * net_out.squeeze(-1) + flag * constant
 
-    def _seen(self, s: torch.Tensor) -> torch.Tensor:
-        """The columns of augmented states the networks see (all without `inputs`)."""
-        return s if self._columns is None else s.index_select(-1, self._columns)
+    def _seen(self, s: torch.Tensor, columns: torch.Tensor | None = None) -> torch.Tensor:
+        """The columns of augmented states a network sees (default: `inputs`; all if None)."""
+        columns = self._columns if columns is None else columns
+        return s if columns is None else s.index_select(-1, columns)
 
     def _r(self, s):
-        return self._masked(self.r_psi(self._seen(s)), s[..., -1], self.r_absorbing)
+        return self._masked(self.r_psi(self._seen(s, self._reward_columns)), s[..., -1], self.r_absorbing)
 
     def _h(self, s):
         return self._masked(self.h(self._seen(s)), s[..., -1], self.h_absorbing)
@@ -127,4 +131,4 @@ class Discriminator(nn.Module):
         """What rebuilds this discriminator (for pickle-free saving)."""
         return {"obs_dim": self.obs_dim, "kind": self.kind, "gamma": self.gamma, "hidden": list(self.hidden),
                 "spectral": self.spectral, "absorbing": self.absorbing, "shaped": self.shaped,
-                "policy_term": self.policy_term, "inputs": self.inputs}
+                "policy_term": self.policy_term, "inputs": self.inputs, "reward_inputs": self.reward_inputs}

@@ -158,7 +158,7 @@ def reward_export(disc: Discriminator, gamma: float) -> tuple[dict, dict[str, to
     meta = {"parts": specs, "kind": disc.kind, "form": "state" if shaped else "transition",
             "gamma": float(gamma), "absorbing": bool(disc.absorbing),
             "absorbing_value": absorbing_value, "absorbing_reward": float(disc.r_absorbing.detach()),
-            "inputs": disc.inputs,
+            "inputs": disc.inputs, "reward_inputs": disc.reward_inputs if shaped else disc.inputs,
             "discriminator": disc.config()}
     return meta, tensors
 

@@ -175,9 +175,10 @@ class Networks:
         for key in ("gamma", "absorbing", "absorbing_value", "absorbing_reward"):
             if key not in loaded.meta:
                 raise ValueError(f"{loaded.path}: missing key {key!r}")
-        inputs = loaded.meta.get("inputs")
-        if inputs is not None and not (isinstance(inputs, list) and all(type(i) is int and i >= 0 for i in inputs)):
-            raise ValueError(f"{loaded.path}: inputs must be a list of observation columns, got {inputs!r}")
+        for key in ("inputs", "reward_inputs"):
+            cols = loaded.meta.get(key)
+            if cols is not None and not (isinstance(cols, list) and all(type(i) is int and i >= 0 for i in cols)):
+                raise ValueError(f"{loaded.path}: {key} must be a list of observation columns, got {cols!r}")
         return loaded
 
     def policy(self, obs: np.ndarray) -> np.ndarray:
@@ -229,20 +230,22 @@ class Networks:
         """The discount saved with the reward."""
         return float(self._reward_pair().meta["gamma"])
 
-    def _states(self, r: Loaded, obs: np.ndarray) -> torch.Tensor:
-        """Normalised observations, the columns the reward saw (all if not saved), with a zero absorbing flag."""
+    def _states(self, r: Loaded, obs: np.ndarray, key: str = "inputs") -> torch.Tensor:
+        """Normalised observations, the columns a network saw (`inputs`, or r_psi's `reward_inputs`; all if not
+        saved), with a zero absorbing flag."""
         x = r.norm(obs)
-        if r.meta.get("inputs") is not None:
-            x = x[:, r.meta["inputs"]]
+        columns = r.meta.get(key, r.meta.get("inputs"))
+        if columns is not None:
+            x = x[:, columns]
         return torch.cat([x, torch.zeros_like(x[:, :1])], dim=-1)
 
     def reward(self, obs: np.ndarray) -> np.ndarray:
         """Per-step reward (T,) of raw observations (T+1, d): AIRL r_psi(s_t), GAIL logit(s_t, s_t+1)."""
         r = self._reward_pair()
         with torch.no_grad():
-            s = self._states(r, obs)
             if r.meta["form"] == "state":
-                return r.parts["r_psi"](s[:-1]).squeeze(-1).numpy()
+                return r.parts["r_psi"](self._states(r, obs[:-1], "reward_inputs")).squeeze(-1).numpy()
+            s = self._states(r, obs)
             return r.parts["net"](torch.cat([s[:-1], s[1:]], dim=-1)).squeeze(-1).numpy()
 
     def potential(self, obs: np.ndarray) -> np.ndarray:

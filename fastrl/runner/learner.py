@@ -109,7 +109,7 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     obs_dim = venv.observation_space.shape[0]
     disc = Discriminator(obs_dim, irl.algorithm, spec.train.params().gamma, tuple(d.hidden), d.spectral_norm,
                          d.absorbing, d.shaped, not off_policy if d.policy_term is None else d.policy_term,
-                         spec.discriminator_inputs())
+                         spec.discriminator_inputs(), spec.reward_inputs())
     transitions = expert_transitions(FastEnv(spec), demos)
     if off_policy:
         cb = OffPolicyAdversarialCallback(disc, transitions, d.current_rollout, d.steps, d.batch_size,

@@ -41,6 +41,9 @@ class DiscriminatorSettings(Strict):
                                      "policy still does). Default (null): GAIL ignores `elapsed`, AIRL sees all. "
                                      "With the clock in its input, GAIL's non-negative reward is about 0 on every "
                                      "state later than the expert's, however far the task has come")
+    reward_ignore: list[str] = Field([], description="shaped AIRL: terms the reward r_psi also leaves out, while "
+                                     "the potential h sees them (`[elapsed]`: the clock in the shaping only). "
+                                     "Off by default: without the clock r_psi no longer ranks ImageCentring trainees")
     shaped: bool = Field(True, description="AIRL: f = r_psi(s) + gamma h(s') - h(s); false: the standard f(s, s')")
     policy_term: bool | None = Field(None, description="AIRL: D's logit is f - log pi(a|s); false: f alone. Default "
                                      "(null): on for PPO, off for SAC, whose squashed Gaussian gives the expert's "

@@ -235,6 +235,9 @@ class TaskSpec(Strict):
         _raise([(("irl", "discriminator", "ignore", i),
                  f"'{name}' is not observed (observation terms: {', '.join(observed)})", name)
                 for i, name in enumerate(self.irl.discriminator.ignore or []) if name not in observed])
+        _raise([(("irl", "discriminator", "reward_ignore", i),
+                 f"'{name}' is not observed (observation terms: {', '.join(observed)})", name)
+                for i, name in enumerate(self.irl.discriminator.reward_ignore) if name not in observed])
         names = [p.name for p in self.scene.portals]
         if self.scope.portal not in names:
             _fail("scope.portal", f"no portal named '{self.scope.portal}' (portals: {', '.join(names)})")
@@ -271,8 +274,20 @@ class TaskSpec(Strict):
         ignore = self.irl.discriminator.ignore
         if ignore is None:
             ignore = ["elapsed"] if self.irl.algorithm == "gail" else []
+        return self._columns_without(ignore)
+
+    def reward_inputs(self) -> list[int] | None:
+        """Observation columns shaped AIRL's reward r_psi sees: the discriminator's less `reward_ignore`."""
+        both = self.discriminator_inputs()
+        own = self._columns_without(self.irl.discriminator.reward_ignore)
+        if own is None or both is None:
+            return both if own is None else own
+        return sorted(set(both) & set(own))
+
+    def _columns_without(self, terms: list[str]) -> list[int] | None:
+        """Observation columns of every term but these (every frame of a stack); None: all of them."""
         column_terms = [n for n in self.observation.terms() for _ in range(OBSERVATION_TERMS[n].size)]
-        keep = [i for i, n in enumerate(column_terms * self.observation.stack) if n not in ignore]
+        keep = [i for i, n in enumerate(column_terms * self.observation.stack) if n not in terms]
         return None if len(keep) == len(column_terms) * self.observation.stack else keep
 
     def portal(self) -> Portal:
