@@ -69,20 +69,20 @@ class Discriminator(nn.Module):
         """The network's output on real states, the constant on absorbing ones."""
         return (1.0 - flag) * net_out.squeeze(-1) + flag * constant
 
-    def _seen(self, s: torch.Tensor, columns: torch.Tensor | None = None) -> torch.Tensor:
-        """The columns of augmented states a network sees (default: `inputs`; all if None)."""
-        columns = self._columns if columns is None else columns
+    @staticmethod
+    def _seen(s: torch.Tensor, columns: torch.Tensor | None) -> torch.Tensor:
+        """These columns of augmented states (all if None)."""
         return s if columns is None else s.index_select(-1, columns)
 
     def _r(self, s):
         return self._masked(self.r_psi(self._seen(s, self._reward_columns)), s[..., -1], self.r_absorbing)
 
     def _h(self, s):
-        return self._masked(self.h(self._seen(s)), s[..., -1], self.h_absorbing)
+        return self._masked(self.h(self._seen(s, self._columns)), s[..., -1], self.h_absorbing)
 
     def _net(self, s, s2):
-        return self._masked(self.net(torch.cat([self._seen(s), self._seen(s2)], dim=-1)), s[..., -1],
-                            self.r_absorbing)
+        pair = torch.cat([self._seen(s, self._columns), self._seen(s2, self._columns)], dim=-1)
+        return self._masked(self.net(pair), s[..., -1], self.r_absorbing)
 
     def f(self, s, s2, terminal):
         """AIRL's f: shaped r_psi(s) + gamma h(s') - h(s) (terminal potential 0 without absorbing), or net(s, s')."""

@@ -232,12 +232,10 @@ class TaskSpec(Strict):
         if self.irl.algorithm == "bc" and self.train.algo != "PPO":
             _fail("irl.algorithm", "behavioural cloning trains the PPO policy: set train.algo: PPO")
         observed = self.observation.terms()
-        _raise([(("irl", "discriminator", "ignore", i),
+        _raise([(("irl", "discriminator", field, i),
                  f"'{name}' is not observed (observation terms: {', '.join(observed)})", name)
-                for i, name in enumerate(self.irl.discriminator.ignore or []) if name not in observed])
-        _raise([(("irl", "discriminator", "reward_ignore", i),
-                 f"'{name}' is not observed (observation terms: {', '.join(observed)})", name)
-                for i, name in enumerate(self.irl.discriminator.reward_ignore) if name not in observed])
+                for field in ("ignore", "reward_ignore")
+                for i, name in enumerate(getattr(self.irl.discriminator, field) or []) if name not in observed])
         names = [p.name for p in self.scene.portals]
         if self.scope.portal not in names:
             _fail("scope.portal", f"no portal named '{self.scope.portal}' (portals: {', '.join(names)})")
@@ -269,20 +267,20 @@ class TaskSpec(Strict):
         _raise(errors)
         return self
 
-    def discriminator_inputs(self) -> list[int] | None:
-        """Observation columns the discriminator sees (every frame of a stack); None: all of them."""
+    def _discriminator_ignores(self) -> list[str]:
+        """The terms the discriminator leaves out (default: GAIL the clock, AIRL none)."""
         ignore = self.irl.discriminator.ignore
         if ignore is None:
-            ignore = ["elapsed"] if self.irl.algorithm == "gail" else []
-        return self._columns_without(ignore)
+            return ["elapsed"] if self.irl.algorithm == "gail" else []
+        return ignore
+
+    def discriminator_inputs(self) -> list[int] | None:
+        """Observation columns the discriminator sees (every frame of a stack); None: all of them."""
+        return self._columns_without(self._discriminator_ignores())
 
     def reward_inputs(self) -> list[int] | None:
         """Observation columns shaped AIRL's reward r_psi sees: the discriminator's less `reward_ignore`."""
-        both = self.discriminator_inputs()
-        own = self._columns_without(self.irl.discriminator.reward_ignore)
-        if own is None or both is None:
-            return both if own is None else own
-        return sorted(set(both) & set(own))
+        return self._columns_without([*self._discriminator_ignores(), *self.irl.discriminator.reward_ignore])
 
     def _columns_without(self, terms: list[str]) -> list[int] | None:
         """Observation columns of every term but these (every frame of a stack); None: all of them."""
