@@ -1,4 +1,5 @@
-"""Adversarial IRL: rewards are relabelled, AIRL's r_psi is separable, absorbing states, spectral norm."""
+"""Adversarial IRL: rewards are relabelled, AIRL's r_psi is separable, absorbing states, spectral norm, gradient
+penalty."""
 
 import numpy as np
 import pytest
@@ -9,7 +10,7 @@ from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.data.replay import expert_trajectories, expert_transitions
 from fastrl.irl import AdversarialCallback, Discriminator
 from fastrl.irl.discriminator import absorbing_states, augment
-from fastrl.irl.fitting import DiscriminatorFit, make_batch
+from fastrl.irl.fitting import DiscriminatorFit, input_gradient_norm, make_batch
 from fastrl.spec import load_spec
 
 from .conftest import spec_file
@@ -124,6 +125,23 @@ def test_spectral_norm_bounds_every_layer():
     bounded, free = layer_norms_after_training(True), layer_norms_after_training(False)
     assert len(bounded) == 3 and max(bounded) <= 1.05
     assert max(free) > 1.5  # the same training without it grows the layers
+
+
+def gradient_norm_after_fitting(kind: str, penalty: float) -> float:
+    """Mean |grad_(s, s') logit| between policy and expert rows after 150 steps on two well-separated clouds."""
+    torch.manual_seed(0)
+    rng = np.random.default_rng(0)
+    disc = Discriminator(6, kind, 0.99, hidden=(32, 32))
+    policy = make_batch(rng.normal(size=(128, 6)), rng.normal(size=(128, 6)), np.zeros(128), np.zeros(128), True)
+    expert = make_batch(rng.normal(3, 1, (128, 6)), rng.normal(3, 1, (128, 6)), np.zeros(128), np.zeros(128), True)
+    DiscriminatorFit(disc, lr=1e-2, batch_size=128, gradient_penalty=penalty).steps(policy, expert, 150)
+    return float(input_gradient_norm(disc, policy, expert, torch.rand(128, 1)).mean())
+
+
+@pytest.mark.parametrize("kind", ["gail", "airl"])
+def test_the_gradient_penalty_holds_the_logits_slope_near_one(kind):
+    assert abs(gradient_norm_after_fitting(kind, 10.0) - 1.0) < 0.2
+    assert gradient_norm_after_fitting(kind, 0.0) > 2.0  # without it the separable clouds steepen the logit
 
 
 def test_standard_airl_is_one_network_on_transitions():

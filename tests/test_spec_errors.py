@@ -386,3 +386,6 @@ def test_irl_section_errors_name_the_field(tmp_path):
     with pytest.raises(SpecError) as e:
         load_spec(SPECS / "tracelines.yaml", ["irl.discriminator.reward_ignore=[clock]"])
     assert "irl.discriminator.reward_ignore.0" in str(e.value) and "'clock' is not observed" in str(e.value)
+    with pytest.raises(SpecError) as e:
+        load_spec(SPECS / "tracelines.yaml", ["irl.discriminator.gradient_penalty=-1"])
+    assert "irl.discriminator.gradient_penalty" in str(e.value)

@@ -23,10 +23,10 @@ class AdversarialCallback(BaseCallback):
 
     def __init__(self, disc: Discriminator, expert: Transitions, epochs: int = 2, batch_size: int = 256,
                  lr: float = 3e-4, seed: int = 0, entropy: bool = True, history: int = 0,
-                 scale_reward: bool | None = None):
+                 scale_reward: bool | None = None, gradient_penalty: float = 0.0):
         super().__init__()
         self.disc, self.expert, self.n_epochs, self.entropy = disc, expert, epochs, entropy
-        self.fit = DiscriminatorFit(disc, lr, batch_size, seed)
+        self.fit = DiscriminatorFit(disc, lr, batch_size, seed, gradient_penalty)
         self.history = PolicyHistory(history, seed) if history else None
         self.scale_reward = disc.kind == "airl" if scale_reward is None else scale_reward
         self.scale: ReturnScale | None = None

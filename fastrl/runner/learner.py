@@ -113,8 +113,8 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     transitions = expert_transitions(FastEnv(spec), demos)
     if off_policy:
         cb = OffPolicyAdversarialCallback(disc, transitions, d.current_rollout, d.steps, d.batch_size,
-                                          d.learning_rate, spec.train.seed, d.every)
+                                          d.learning_rate, spec.train.seed, d.every, d.gradient_penalty)
     else:
         cb = AdversarialCallback(disc, transitions, d.epochs, d.batch_size, d.learning_rate, spec.train.seed,
-                                 d.entropy, d.history, d.scale_reward)
+                                 d.entropy, d.history, d.scale_reward, d.gradient_penalty)
     return Learner(spec, venv, model, [cb], disc, demos)

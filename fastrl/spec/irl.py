@@ -32,6 +32,8 @@ class DiscriminatorSettings(Strict):
     every: int = Field(0, ge=0, description="off-policy: env steps (all envs) between discriminator fits, on the "
                        "samples since the last fit; 0: after every rollout")
     spectral_norm: bool = Field(False, description="spectrally normalise every layer")
+    gradient_penalty: float = Field(0.0, ge=0, description="weight of the WGAN-GP penalty (|grad logit| - 1)^2 at "
+                                    "points between policy and expert inputs; 0: none")
     current_rollout: bool = Field(True, description="off-policy: train only on the latest rollout's samples")
     history: int = Field(0, ge=0, description="on-policy (PPO): keep a uniform sample of this many earlier policy "
                          "transitions and add as many of them as the rollout has to each fit's policy side, so the "
