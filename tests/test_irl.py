@@ -1,16 +1,18 @@
 """Adversarial IRL: rewards are relabelled, AIRL's r_psi is separable, absorbing states, spectral norm, gradient
-penalty."""
+penalty, the ranking prior."""
 
 import numpy as np
 import pytest
 import torch
 
 import fastrl
+from fastrl.agents.expert import ScriptedExpert
 from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.data.replay import expert_trajectories, expert_transitions
 from fastrl.irl import AdversarialCallback, Discriminator
 from fastrl.irl.discriminator import absorbing_states, augment
 from fastrl.irl.fitting import DiscriminatorFit, input_gradient_norm, make_batch
+from fastrl.irl.ranking import RankedRollouts, noisy_expert_rollout
 from fastrl.spec import load_spec
 
 from .conftest import spec_file
@@ -135,7 +137,7 @@ def gradient_norm_after_fitting(kind: str, penalty: float) -> float:
     policy = make_batch(rng.normal(size=(128, 6)), rng.normal(size=(128, 6)), np.zeros(128), np.zeros(128), True)
     expert = make_batch(rng.normal(3, 1, (128, 6)), rng.normal(3, 1, (128, 6)), np.zeros(128), np.zeros(128), True)
     DiscriminatorFit(disc, lr=1e-2, batch_size=128, gradient_penalty=penalty).steps(policy, expert, 150)
-    return float(input_gradient_norm(disc, policy, expert, torch.rand(128, 1)).mean())
+    return float(input_gradient_norm(disc, policy, expert, torch.rand(128, 1)).mean().detach())
 
 
 @pytest.mark.parametrize("kind", ["gail", "airl"])
@@ -233,3 +235,37 @@ def test_absorbing_rows_train_only_the_absorbing_constants(kind):
     for _ in range(50):  # the expert always ends, the policy never: ending becomes worth more
         fit._fit(policy, absorbed, [np.arange(4)])
     assert disc.absorbing_value() > 5.0  # a free constant, whatever the spectral norm does to the networks
+
+
+def test_noiseless_ranking_rollouts_are_the_experts_and_end_in_the_absorbing_state():
+    spec = load_spec(spec_file("tracelines"))
+    env = fastrl.make(spec)
+    expert_obs = expert_transitions(env, expert_trajectories(env, [7])).obs
+    obs, ended = noisy_expert_rollout(env, ScriptedExpert(env), 0.0, 7)
+    assert ended and np.allclose(obs[:-1], expert_obs, atol=1e-5)
+    ranked = RankedRollouts(env, [0.0, 1.0], 1, seed=7)
+    s = ranked.states(lambda o: o)
+    assert torch.equal(s[0, len(obs):, -1], torch.ones(s.shape[1] - len(obs)))  # absorbed after the task is done
+    assert torch.equal(s[0, len(obs):, :-1], torch.zeros(s.shape[1] - len(obs), s.shape[2] - 1))
+    assert not ranked.absorbed[1].any()  # random actions do not finish TraceLines
+
+
+def test_the_ranking_loss_teaches_r_psi_that_less_noise_is_better():
+    spec = load_spec(spec_file("tracelines"), ["episode.time_limit=8"])
+    ranked = RankedRollouts(fastrl.make(spec), [0.0, 0.5, 1.0], 2, snippet=20)
+    torch.manual_seed(0)
+    disc = Discriminator(ranked.raw.shape[2], "airl", 0.99, hidden=(32, 32))
+    states, rng = ranked.states(lambda o: o), np.random.default_rng(0)
+    optim = torch.optim.Adam(disc.parameters(), lr=1e-3)
+    with torch.no_grad():
+        first = float(ranked.loss(disc, states, rng))
+    for _ in range(200):
+        loss = ranked.loss(disc, states, rng)
+        optim.zero_grad()
+        loss.backward()
+        optim.step()
+    with torch.no_grad():
+        totals = disc.reward(states).sum(-1).numpy()
+        assert float(ranked.loss(disc, states, rng)) < first
+    means = [totals[ranked.noise == eps].mean() for eps in (0.0, 0.5, 1.0)]
+    assert means[0] > means[1] > means[2], means

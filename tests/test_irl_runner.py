@@ -72,6 +72,23 @@ def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
     assert any("irl/disc_accuracy" in e for e in entities) and any("eval/subtasks" in e for e in entities)
 
 
+def test_airl_with_the_ranking_prior_logs_its_loss_and_gail_says_it_ignores_it(tmp_path):
+    ranking = ["irl.discriminator.ranking=1", "irl.discriminator.ranking_noise=[0, 1]",
+               "irl.discriminator.ranking_episodes=1"]
+    res = invoke(["irl", str(spec_file("tracelines")), "--algorithm", "airl", "--timesteps", "256", *sets(ranking)],
+                 tmp_path / "airl")
+    assert res.exit_code == 0, res.output
+    rows = [json.loads(line) for line in (only_run(tmp_path / "airl") / "metrics.jsonl").read_text().splitlines()]
+    losses = [r["irl/ranking_loss"] for r in rows if "irl/ranking_loss" in r]
+    assert losses and all(np.isfinite(v) and v > 0 for v in losses)
+    res = invoke(["irl", str(spec_file("tracelines")), "--algorithm", "gail", "--timesteps", "256", *sets(ranking)],
+                 tmp_path / "gail")
+    assert res.exit_code == 0, res.output
+    assert "ranking applies to shaped AIRL on PPO only" in res.output
+    rows = (only_run(tmp_path / "gail") / "metrics.jsonl").read_text()
+    assert "irl/ranking_loss" not in rows
+
+
 def test_irl_reads_a_demo_folder_and_reports_bad_files(tmp_path):
     demos = tmp_path / "demos"
     res = CliRunner().invoke(app, ["demos", "--expert", str(spec_file("tracelines")), "-n", "2", "-o", str(demos),

@@ -8,8 +8,9 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 from .discriminator import Discriminator, augment
 from .fitting import DiscriminatorFit, Transitions, make_batch
-from .generator import current_original_obs, original_obs, transitions_batch
+from .generator import current_original_obs, normalize_obs, original_obs, transitions_batch
 from .history import PolicyHistory
+from .ranking import RankedRollouts
 from .scaling import ReturnScale
 
 
@@ -19,11 +20,13 @@ class AdversarialCallback(BaseCallback):
     With `history` > 0, each fit's policy side is the rollout plus as many transitions drawn from a reservoir of
     that many earlier ones (raw observations, normalised and scored under the current policy when drawn).
     With `scale_reward` (default: AIRL yes, GAIL no), the generator's learned reward is divided by the running spread
-    of its discounted return."""
+    of its discounted return. With `ranked` rollouts, each discriminator step adds `ranking_weight` times their
+    ranking loss on shaped AIRL's r_psi."""
 
     def __init__(self, disc: Discriminator, expert: Transitions, epochs: int = 2, batch_size: int = 256,
                  lr: float = 3e-4, seed: int = 0, entropy: bool = True, history: int = 0,
-                 scale_reward: bool | None = None, gradient_penalty: float = 0.0):
+                 scale_reward: bool | None = None, gradient_penalty: float = 0.0,
+                 ranked: RankedRollouts | None = None, ranking_weight: float = 0.0):
         super().__init__()
         self.disc, self.expert, self.n_epochs, self.entropy = disc, expert, epochs, entropy
         self.fit = DiscriminatorFit(disc, lr, batch_size, seed, gradient_penalty)
@@ -31,6 +34,8 @@ class AdversarialCallback(BaseCallback):
         self.scale_reward = disc.kind == "airl" if scale_reward is None else scale_reward
         self.scale: ReturnScale | None = None
         self.stats: dict[str, float] = {}
+        self.ranked, self.ranking_weight = ranked, ranking_weight
+        self.ranking_rng = np.random.default_rng(seed + 1)
 
     def _on_rollout_start(self) -> None:
         self.next_obs, self.terminal, self.env_rewards, self.dones = [], [], [], []
@@ -77,6 +82,9 @@ class AdversarialCallback(BaseCallback):
         rollout = make_batch(obs, nxt, term, log_pi, self.disc.absorbing)
         policy = rollout if self.history is None else self._with_history(rollout, term)
         expert = transitions_batch(self.model, self.expert, self.disc)
+        if self.ranked is not None:
+            states = self.ranked.states(lambda o: normalize_obs(self.model, o))
+            self.fit.ranking = lambda: self.ranking_weight * self.ranked.loss(self.disc, states, self.ranking_rng)
         self.stats.update(self.fit.epochs(policy, expert, self.n_epochs))
         self.stats.update(self.fit.reward_stats(rollout, expert))
         with torch.no_grad():

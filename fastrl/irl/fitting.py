@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -82,6 +83,7 @@ class DiscriminatorFit:
     def __init__(self, disc: Discriminator, lr: float = 3e-4, batch_size: int = 256, seed: int = 0,
                  gradient_penalty: float = 0.0):
         self.disc, self.batch_size, self.gradient_penalty = disc, batch_size, gradient_penalty
+        self.ranking: Callable[[], torch.Tensor] | None = None  # a weighted ranking loss added to each step
         self.optim = torch.optim.Adam(disc.parameters(), lr=lr)
         self.rng = np.random.default_rng(seed)
 
@@ -98,7 +100,7 @@ class DiscriminatorFit:
 
     def _fit(self, policy: Batch, expert: Batch, batches: list[np.ndarray]) -> dict[str, float]:
         bce = torch.nn.functional.binary_cross_entropy_with_logits
-        losses, accs, z_p, z_e = [], [], [], []
+        losses, accs, z_p, z_e, ranks = [], [], [], [], []
         for idx in batches:
             p, e = policy.take(idx), expert.take(self.rng.integers(0, len(expert), len(idx)))
             zp = self.disc.logits(p.s, p.s2, p.terminal, p.log_pi)
@@ -108,15 +110,20 @@ class DiscriminatorFit:
             if self.gradient_penalty:
                 alpha = torch.as_tensor(self.rng.random((len(idx), 1)), dtype=torch.float32)
                 penalty = self.gradient_penalty * ((input_gradient_norm(self.disc, p, e, alpha) - 1.0) ** 2).mean()
+            rank = torch.zeros(()) if self.ranking is None else self.ranking()
             self.optim.zero_grad()
-            (loss + penalty).backward()
+            (loss + penalty + rank).backward()
             self.optim.step()
             losses.append(float(loss.detach()))  # the cross-entropy alone, comparable with and without the penalty
             accs.append(0.5 * float((zp < 0).float().mean() + (ze > 0).float().mean()))
             z_p.append(float(zp.detach().mean()))
             z_e.append(float(ze.detach().mean()))
-        return {"irl/disc_loss": float(np.mean(losses)), "irl/disc_accuracy": float(np.mean(accs)),
-                "irl/logit_policy": float(np.mean(z_p)), "irl/logit_expert": float(np.mean(z_e))}
+            ranks.append(float(rank.detach()))
+        stats = {"irl/disc_loss": float(np.mean(losses)), "irl/disc_accuracy": float(np.mean(accs)),
+                 "irl/logit_policy": float(np.mean(z_p)), "irl/logit_expert": float(np.mean(z_e))}
+        if self.ranking is not None:
+            stats["irl/ranking_loss"] = float(np.mean(ranks))
+        return stats
 
     def reward_stats(self, policy: Batch, expert: Batch) -> dict[str, float]:
         """Mean learned reward (r_psi for shaped AIRL, else the logit) on policy and expert rows."""

@@ -17,6 +17,7 @@ from ..data.replay import demonstration_pairs, expert_transitions
 from ..data.trajectory import Trajectory, load_trajectories
 from ..env.fast_env import FastEnv
 from ..irl import AdversarialCallback, Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
+from ..irl.ranking import RankedRollouts
 from ..spec.models import TaskSpec
 from .demos import write_demos
 
@@ -111,10 +112,15 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
                          d.absorbing, d.shaped, not off_policy if d.policy_term is None else d.policy_term,
                          spec.discriminator_inputs(), spec.reward_inputs())
     transitions = expert_transitions(FastEnv(spec), demos)
+    ranked = None
+    if d.ranking and disc.shaped and not off_policy:
+        ranked = RankedRollouts(FastEnv(spec), d.ranking_noise, d.ranking_episodes)
+    elif d.ranking:
+        console.print("[yellow]irl.discriminator.ranking applies to shaped AIRL on PPO only: ignored[/]")
     if off_policy:
         cb = OffPolicyAdversarialCallback(disc, transitions, d.current_rollout, d.steps, d.batch_size,
                                           d.learning_rate, spec.train.seed, d.every, d.gradient_penalty)
     else:
         cb = AdversarialCallback(disc, transitions, d.epochs, d.batch_size, d.learning_rate, spec.train.seed,
-                                 d.entropy, d.history, d.scale_reward, d.gradient_penalty)
+                                 d.entropy, d.history, d.scale_reward, d.gradient_penalty, ranked, d.ranking)
     return Learner(spec, venv, model, [cb], disc, demos)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -46,6 +46,11 @@ class DiscriminatorSettings(Strict):
     reward_ignore: list[str] = Field([], description="shaped AIRL: terms the reward r_psi also leaves out, while "
                                      "the potential h sees them (`[elapsed]`: the clock in the shaping only). "
                                      "Off by default: without the clock r_psi no longer ranks ImageCentring trainees")
+    ranking: float = Field(0.0, ge=0, description="shaped AIRL on PPO: weight of a ranking loss on r_psi (D-REX): "
+                           "over snippets of the scripted expert whose actions are random at `ranking_noise` rates, "
+                           "less noise must sum higher; 0: none")
+    ranking_noise: list[Annotated[float, Field(ge=0, le=1)]] = Field([0.0, 0.25, 0.5, 0.75, 1.0], min_length=2)
+    ranking_episodes: int = Field(4, ge=1, description="ranking rollouts per noise rate")
     shaped: bool = Field(True, description="AIRL: f = r_psi(s) + gamma h(s') - h(s); false: the standard f(s, s')")
     policy_term: bool | None = Field(None, description="AIRL: D's logit is f - log pi(a|s); false: f alone. Default "
                                      "(null): on for PPO, off for SAC, whose squashed Gaussian gives the expert's "
