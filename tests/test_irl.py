@@ -269,3 +269,14 @@ def test_the_ranking_loss_teaches_r_psi_that_less_noise_is_better():
         assert float(ranked.loss(disc, states, rng)) < first
     means = [totals[ranked.noise == eps].mean() for eps in (0.0, 0.5, 1.0)]
     assert means[0] > means[1] > means[2], means
+
+
+def test_a_held_random_action_is_repeated_for_its_steps():
+    env = fastrl.make(load_spec(spec_file("tracelines"), ["episode.time_limit=4"]))
+    obs, _ = noisy_expert_rollout(env, ScriptedExpert(env), 1.0, 3, repeat=1000)  # one random action, held
+    env.action_space.seed(3)
+    action = env.action_space.sample()
+    held = [env.reset(seed=3)[0]] + [env.step(action)[0] for _ in range(len(obs) - 1)]
+    assert np.allclose(obs, np.array(held), atol=1e-6)
+    varied, _ = noisy_expert_rollout(env, ScriptedExpert(env), 1.0, 3, repeat=1)
+    assert not np.allclose(varied, obs)

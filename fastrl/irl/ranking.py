@@ -1,8 +1,9 @@
 """A ranking prior for shaped AIRL's r_psi from automatically ranked demonstrations (D-REX, Brown et al. 2019).
 
-The scripted expert is rolled out with each action replaced by a random one at several rates: more noise, worse
-behaviour. Each discriminator step then asks r_psi to sum higher over a snippet of a less noisy rollout than over
-the same time steps of a noisier one (Bradley-Terry), so the reward also orders behaviour far from the expert's.
+The scripted expert is rolled out with its actions replaced by random ones at several rates (each held for a few
+steps if asked, so that the scope also wanders into the walls): more noise, worse behaviour. Each discriminator
+step then asks r_psi to sum higher over a snippet of a less noisy rollout than over the same time steps of a
+noisier one (Bradley-Terry), so the reward also orders behaviour far from the expert's.
 A rollout that ended (the task done) continues in the absorbing state up to the time limit.
 """
 
@@ -17,18 +18,21 @@ from ..agents.expert import ScriptedExpert
 from .discriminator import Discriminator, augment
 
 
-def noisy_expert_rollout(env, expert: ScriptedExpert, noise: float, seed: int) -> tuple[np.ndarray, bool]:
-    """Raw observations (T+1, d) of the expert whose every action is random with probability `noise`; and whether
-    the episode terminated (the task done) rather than ran out of time."""
+def noisy_expert_rollout(env, expert: ScriptedExpert, noise: float, seed: int, repeat: int = 1
+                         ) -> tuple[np.ndarray, bool]:
+    """Raw observations (T+1, d) of the expert whose action is replaced, with probability `noise`, by a random one
+    held for `repeat` steps; and whether the episode terminated (the task done) rather than ran out of time."""
     rng = np.random.default_rng(seed)
     env.action_space.seed(seed)
     obs, _ = env.reset(seed=seed)
     expert.reset()
-    observations, term, trunc = [obs], False, False
+    observations, term, trunc, held, left = [obs], False, False, None, 0
     while not (term or trunc):
         action = expert.act(obs)
-        if rng.random() < noise:
-            action = env.action_space.sample()
+        if left == 0 and rng.random() < noise:
+            held, left = env.action_space.sample(), repeat
+        if left:
+            action, left = held, left - 1
         obs, _, term, trunc, _ = env.step(action)
         observations.append(obs)
     return np.array(observations, np.float32), bool(term)
@@ -37,9 +41,10 @@ def noisy_expert_rollout(env, expert: ScriptedExpert, noise: float, seed: int) -
 class RankedRollouts:
     """Noisy-expert rollouts padded to one length, their noise rates, and the ranking loss of r_psi on them."""
 
-    def __init__(self, env, noise: list[float], episodes: int, seed: int = 50000, snippet: int = 50):
+    def __init__(self, env, noise: list[float], episodes: int, seed: int = 50000, snippet: int = 50,
+                 repeat: int = 1):
         expert = ScriptedExpert(env)
-        runs = [noisy_expert_rollout(env, expert, eps, seed + 1000 * i + k)
+        runs = [noisy_expert_rollout(env, expert, eps, seed + 1000 * i + k, repeat)
                 for i, eps in enumerate(noise) for k in range(episodes)]
         self.noise = np.repeat(np.asarray(noise, float), episodes)
         self.snippet = snippet

@@ -114,7 +114,7 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     transitions = expert_transitions(FastEnv(spec), demos)
     ranked = None
     if d.ranking and disc.shaped and not off_policy:
-        ranked = RankedRollouts(FastEnv(spec), d.ranking_noise, d.ranking_episodes)
+        ranked = RankedRollouts(FastEnv(spec), d.ranking_noise, d.ranking_episodes, repeat=d.ranking_repeat)
     elif d.ranking:
         console.print("[yellow]irl.discriminator.ranking applies to shaped AIRL on PPO only: ignored[/]")
     if off_policy:

@@ -49,8 +49,10 @@ class DiscriminatorSettings(Strict):
     ranking: float = Field(0.0, ge=0, description="shaped AIRL on PPO: weight of a ranking loss on r_psi (D-REX): "
                            "over snippets of the scripted expert whose actions are random at `ranking_noise` rates, "
                            "less noise must sum higher; 0: none")
-    ranking_noise: list[Annotated[float, Field(ge=0, le=1)]] = Field([0.0, 0.25, 0.5, 0.75, 1.0], min_length=2)
+    ranking_noise: list[Annotated[float, Field(ge=0, le=1)]] = Field(
+        [0.0, 0.25, 0.5, 0.75, 1.0], min_length=2, description="random-action rates of the ranking rollouts")
     ranking_episodes: int = Field(4, ge=1, description="ranking rollouts per noise rate")
+    ranking_repeat: int = Field(1, ge=1, description="steps each random action of the ranking rollouts is held")
     shaped: bool = Field(True, description="AIRL: f = r_psi(s) + gamma h(s') - h(s); false: the standard f(s, s')")
     policy_term: bool | None = Field(None, description="AIRL: D's logit is f - log pi(a|s); false: f alone. Default "
                                      "(null): on for PPO, off for SAC, whose squashed Gaussian gives the expert's "
