@@ -8,9 +8,10 @@ checkpoint are rolled out deterministically on held-out seeds (20000, 20001, ...
 spec's heuristic return (sum of w . phi) and by the learned reward saved in networks/reward.pt, loaded without
 pickle: AIRL r_psi(s), GAIL log D - log(1 - D), discounted with the generator's gamma plus the absorbing tail if
 the episode ended in success. Prints Spearman's rho over rollouts (and, for reference, with the undiscounted
-sum of learned rewards without the tail, and over per-policy mean returns), then, where a task and algorithm
-have runs of several training seeds, rho's mean ± sd over them; writes the results as JSON and a scatter figure
-(the lowest seed of each task and algorithm).
+sum of learned rewards without the tail; undiscounted to the time limit, a finished episode's remaining steps
+at the absorbing state's reward, as the heuristic return is undiscounted; and over per-policy mean returns),
+then, where a task and algorithm have runs of several training seeds, rho's mean ± sd over them; writes the
+results as JSON and a scatter figure (the lowest seed of each task and algorithm).
 """
 
 from __future__ import annotations
@@ -64,15 +65,20 @@ def check(run: Path, episodes: int) -> dict:
     for steps, policy in policies.items():
         for seed in range(20000, 20000 + episodes):
             obs, heuristic, success = rollout(env, policy, seed)
+            learned_sum = float(nets.reward(obs).sum())
+            tail = (env.max_steps - (len(obs) - 1)) * nets.absorbing_reward() if success else 0.0
             rows.append({"policy_steps": steps, "seed": seed, "heuristic": heuristic, "success": success,
-                         "learned": nets.learned_return(obs, success), "learned_sum": float(nets.reward(obs).sum())})
+                         "steps": len(obs) - 1, "learned": nets.learned_return(obs, success),
+                         "learned_sum": learned_sum, "learned_horizon": learned_sum + tail})
     h = [r["heuristic"] for r in rows]
     rho = spearmanr(h, [r["learned"] for r in rows]).statistic
     rho_sum = spearmanr(h, [r["learned_sum"] for r in rows]).statistic
+    rho_horizon = spearmanr(h, [r["learned_horizon"] for r in rows]).statistic
     mean_of = lambda key: [np.mean([r[key] for r in rows if r["policy_steps"] == s]) for s in policies]  # noqa: E731
     rho_policy = spearmanr(mean_of("heuristic"), mean_of("learned")).statistic
     return {"run": str(run), "task": spec.name, "algorithm": nets.kind, "policies": len(policies),
             "rollouts": len(rows), "spearman": float(rho), "spearman_sum": float(rho_sum),
+            "spearman_horizon": float(rho_horizon),
             "spearman_policy_means": float(rho_policy), "rows": rows}
 
 
@@ -85,11 +91,12 @@ def training_seed(result: dict) -> int | None:
 def print_tables(results: list[dict]) -> None:
     """One row per run; then, where a task and algorithm have several runs (seeds), mean ± sd over them."""
     print("| task | algorithm | seed | policies x episodes | Spearman rho (learned return vs heuristic) | "
-          "rho, undiscounted sum without tail | rho of per-policy means |")
-    print("|---|---|---|---|---|---|---|")
+          "rho, undiscounted sum without tail | rho, undiscounted to the time limit | rho of per-policy means |")
+    print("|---|---|---|---|---|---|---|---|")
     for r in results:
+        horizon = f"{r['spearman_horizon']:.3f}" if "spearman_horizon" in r else "-"  # not in older results
         print(f"| {r['task']} | {r['algorithm'].upper()} | {training_seed(r)} | {r['policies']} x "
-              f"{r['rollouts'] // r['policies']} | {r['spearman']:.3f} | {r['spearman_sum']:.3f} | "
+              f"{r['rollouts'] // r['policies']} | {r['spearman']:.3f} | {r['spearman_sum']:.3f} | {horizon} | "
               f"{r['spearman_policy_means']:.3f} |")
     groups: dict[tuple, list[dict]] = {}
     for r in results:
