@@ -389,3 +389,6 @@ def test_irl_section_errors_name_the_field(tmp_path):
     with pytest.raises(SpecError) as e:
         load_spec(SPECS / "tracelines.yaml", ["irl.discriminator.gradient_penalty=-1"])
     assert "irl.discriminator.gradient_penalty" in str(e.value)
+    with pytest.raises(SpecError) as e:
+        load_spec(SPECS / "tracelines.yaml", ["irl.discriminator.ranking_noise=[0, 1.5]"])
+    assert "irl.discriminator.ranking_noise.1" in str(e.value)
