@@ -147,11 +147,15 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--cap", type=int, default=3_000_000, help="step budget per run")
     ap.add_argument("--root", default="runs/bench-irl")
-    ap.add_argument("--figure", default="docs/irl_fig4.png")
+    ap.add_argument("--figure", help="default: docs/irl_fig4.png for the default root, else ROOT/fig4.png (so a "
+                    "report on a probe's root leaves the published figure alone)")
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
     ap.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
                     help="spec overrides for the GAIL and AIRL runs, e.g. irl.discriminator.history=200000")
     args = ap.parse_args()
+    if args.figure is None:
+        default_root = Path(args.root) == Path(ap.get_default("root"))
+        args.figure = "docs/irl_fig4.png" if default_root else str(Path(args.root) / "fig4.png")
     run(args) if args.mode == "run" else report(args)
 
 
