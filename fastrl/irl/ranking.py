@@ -22,20 +22,23 @@ def noisy_expert_rollout(env, expert: ScriptedExpert, noise: float, seed: int, r
                          ) -> tuple[np.ndarray, bool]:
     """Raw observations (T+1, d) of the expert whose action is replaced, with probability `noise`, by a random one
     held for `repeat` steps; and whether the episode terminated (the task done) rather than ran out of time."""
+    from ..data.replay import rollout_trajectory  # data imports irl: import here, not at module level
+
     rng = np.random.default_rng(seed)
     env.action_space.seed(seed)
-    obs, _ = env.reset(seed=seed)
-    expert.reset()
-    observations, term, trunc, held, left = [obs], False, False, None, 0
-    while not (term or trunc):
+    held, left = None, 0
+
+    def act(obs):
+        nonlocal held, left
         action = expert.act(obs)
         if left == 0 and rng.random() < noise:
             held, left = env.action_space.sample(), repeat
         if left:
             action, left = held, left - 1
-        obs, _, term, trunc, _ = env.step(action)
-        observations.append(obs)
-    return np.array(observations, np.float32), bool(term)
+        return action
+
+    traj, observations = rollout_trajectory(env, act, seed, {}, expert.reset)
+    return observations.astype(np.float32), traj.meta["subtasks"] >= traj.meta["subtasks_total"]
 
 
 class RankedRollouts:
@@ -69,9 +72,12 @@ class RankedRollouts:
         i, j = rng.integers(0, len(self.noise), (2, pairs))
         keep = self.noise[i] != self.noise[j]
         i, j = i[keep], j[keep]
-        better, worse = np.where(self.noise[i] < self.noise[j], i, j), np.where(self.noise[i] < self.noise[j], j, i)
+        if not len(i):
+            return torch.zeros(())
+        swap = self.noise[i] > self.noise[j]
+        better, worse = np.where(swap, j, i), np.where(swap, i, j)
         steps = states.shape[1]
         start = rng.integers(0, max(steps - self.snippet, 1), len(better))
         t = np.minimum(start[:, None] + np.arange(self.snippet), steps - 1)
         margin = disc.reward(states[better[:, None], t]).sum(-1) - disc.reward(states[worse[:, None], t]).sum(-1)
-        return torch.nn.functional.softplus(-margin).mean() if len(better) else torch.zeros(())
+        return torch.nn.functional.softplus(-margin).mean()

@@ -111,10 +111,11 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     disc = Discriminator(obs_dim, irl.algorithm, spec.train.params().gamma, tuple(d.hidden), d.spectral_norm,
                          d.absorbing, d.shaped, not off_policy if d.policy_term is None else d.policy_term,
                          spec.discriminator_inputs(), spec.reward_inputs())
-    transitions = expert_transitions(FastEnv(spec), demos)
+    env = FastEnv(spec)
+    transitions = expert_transitions(env, demos)
     ranked = None
     if d.ranking and disc.shaped and not off_policy:
-        ranked = RankedRollouts(FastEnv(spec), d.ranking_noise, d.ranking_episodes, repeat=d.ranking_repeat)
+        ranked = RankedRollouts(env, d.ranking_noise, d.ranking_episodes, repeat=d.ranking_repeat)
     elif d.ranking:
         console.print("[yellow]irl.discriminator.ranking applies to shaped AIRL on PPO only: ignored[/]")
     if off_policy:
