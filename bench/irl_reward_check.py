@@ -2,6 +2,7 @@
 
     python bench/irl_reward_check.py runs/bench-irl/tracelines/*-airl-ppo-s0 [more run dirs] [--episodes 8]
     python bench/irl_reward_check.py --from-json docs/irl_reward_check.json [more results or runs]
+    python bench/irl_reward_check.py REWARD_RUN... --pool runs/bench-irl/tracelines/* [...]   # a common pool
 
 For each run (GAIL or AIRL, with networks/ and checkpoints/): the untrained policy (same seed) and every saved
 checkpoint are rolled out deterministically on held-out seeds (20000, 20001, ...). Each rollout is scored by the
@@ -12,6 +13,10 @@ sum of learned rewards without the tail; undiscounted to the time limit, a finis
 at the absorbing state's reward, as the heuristic return is undiscounted; and over per-policy mean returns),
 then, where a task and algorithm have runs of several training seeds, rho's mean ± sd over them; writes the
 results as JSON and a scatter figure (the lowest seed of each task and algorithm).
+
+With --pool, each reward is scored instead on the checkpoints of the pool's runs of its task (PPO on the
+heuristic, BC, GAIL, AIRL, any seed) but its own, plus one untrained policy per training seed: policies its
+discriminator never saw, the same set for every reward, so rewards of different settings compare directly.
 """
 
 from __future__ import annotations
@@ -43,49 +48,139 @@ def rollout(env, policy, seed: int) -> tuple[np.ndarray, float, bool]:
     return np.array(observations), total, bool(info.get("success", False))
 
 
+def untrained_policy(spec):
+    """The policy a run of this spec starts from (its training seed), as obs -> action."""
+    from fastrl.agents.sb3 import build_model, make_vec_env, policy_function
+
+    venv = make_vec_env(spec, 1, spec.train.seed)
+    venv.training = False
+    with warnings.catch_warnings():  # one env cannot fill a training batch: we only act
+        warnings.simplefilter("ignore", UserWarning)
+        return policy_function(build_model(spec, venv), venv)
+
+
+def run_policies(run: Path, untrained: bool = True) -> dict[int, object]:
+    """A run's saved policies by training steps: every checkpoint, and the untrained policy (same seed) as 0."""
+    from fastrl.runner.saved import checkpoint_policy
+    from fastrl.spec import load_spec
+
+    spec = load_spec(run / "spec.yaml")
+    policies = {0: untrained_policy(spec)} if untrained else {}
+    for ckpt in sorted((run / "checkpoints").glob("[0-9]*")):
+        policies[int(ckpt.name)] = checkpoint_policy(spec, ckpt)
+    return policies
+
+
+def rollouts(env, policies: dict[int, object], episodes: int) -> list[dict]:
+    """Held-out rollouts (seeds 20000, ...) of each policy: observations, heuristic return, success, length."""
+    rows = []
+    for steps, policy in policies.items():
+        for seed in range(20000, 20000 + episodes):
+            obs, heuristic, success = rollout(env, policy, seed)
+            rows.append({"policy_steps": steps, "seed": seed, "heuristic": heuristic,
+                         "success": success, "steps": len(obs) - 1, "obs": obs})
+    return rows
+
+
+def scored(rows: list[dict], nets, max_steps: int) -> list[dict]:
+    """The rows with their learned returns (discounted with tail, undiscounted, undiscounted to the limit)."""
+    out = []
+    for r in rows:
+        obs, success = r["obs"], r["success"]
+        learned_sum = float(nets.reward(obs).sum())
+        tail = (max_steps - (len(obs) - 1)) * nets.absorbing_reward() if success else 0.0
+        out.append({k: v for k, v in r.items() if k != "obs"}
+                   | {"learned": nets.learned_return(obs, success), "learned_sum": learned_sum,
+                      "learned_horizon": learned_sum + tail})
+    return out
+
+
+def correlations(rows: list[dict], key=lambda r: r["policy_steps"]) -> dict:
+    """Spearman's rho of heuristic against each learned return over rollouts, and over per-policy means."""
+    h = [r["heuristic"] for r in rows]
+    rho = {name: float(spearmanr(h, [r[field] for r in rows]).statistic)
+           for name, field in (("spearman", "learned"), ("spearman_sum", "learned_sum"),
+                               ("spearman_horizon", "learned_horizon"))}
+    policies = list(dict.fromkeys(key(r) for r in rows))
+    mean_of = lambda f: [np.mean([r[f] for r in rows if key(r) == p]) for p in policies]  # noqa: E731
+    rho["spearman_policy_means"] = float(spearmanr(mean_of("heuristic"), mean_of("learned")).statistic)
+    return {"policies": len(policies), "rollouts": len(rows), **rho}
+
+
+def setting(spec) -> str:
+    """What a run was trained with but its seed, as a hash: runs of one setting differ only in the seed."""
+    from fastrl.spec import spec_hash
+
+    return spec_hash(spec.model_copy(update={"train": spec.train.model_copy(update={"seed": 0})}))
+
+
 def check(run: Path, episodes: int) -> dict:
     """Rollouts of every saved policy of a run, both returns, and their rank correlation."""
-    from fastrl.agents.sb3 import build_model, make_vec_env, policy_function
     from fastrl.env import FastEnv
     from fastrl.irl.export import load_networks
-    from fastrl.runner.saved import checkpoint_policy
     from fastrl.spec import load_spec
 
     spec = load_spec(run / "spec.yaml")
     nets = load_networks(run / "networks")
     env = FastEnv(spec)
-    venv = make_vec_env(spec, 1, spec.train.seed)
-    venv.training = False
-    with warnings.catch_warnings():  # one env cannot fill a training batch: we only act
-        warnings.simplefilter("ignore", UserWarning)
-        policies = {0: policy_function(build_model(spec, venv), venv)}
-    for ckpt in sorted((run / "checkpoints").glob("[0-9]*")):
-        policies[int(ckpt.name)] = checkpoint_policy(spec, ckpt)
-    rows = []
-    for steps, policy in policies.items():
-        for seed in range(20000, 20000 + episodes):
-            obs, heuristic, success = rollout(env, policy, seed)
-            learned_sum = float(nets.reward(obs).sum())
-            tail = (env.max_steps - (len(obs) - 1)) * nets.absorbing_reward() if success else 0.0
-            rows.append({"policy_steps": steps, "seed": seed, "heuristic": heuristic, "success": success,
-                         "steps": len(obs) - 1, "learned": nets.learned_return(obs, success),
-                         "learned_sum": learned_sum, "learned_horizon": learned_sum + tail})
-    h = [r["heuristic"] for r in rows]
-    rho = spearmanr(h, [r["learned"] for r in rows]).statistic
-    rho_sum = spearmanr(h, [r["learned_sum"] for r in rows]).statistic
-    rho_horizon = spearmanr(h, [r["learned_horizon"] for r in rows]).statistic
-    mean_of = lambda key: [np.mean([r[key] for r in rows if r["policy_steps"] == s]) for s in policies]  # noqa: E731
-    rho_policy = spearmanr(mean_of("heuristic"), mean_of("learned")).statistic
-    return {"run": str(run), "task": spec.name, "algorithm": nets.kind, "policies": len(policies),
-            "rollouts": len(rows), "spearman": float(rho), "spearman_sum": float(rho_sum),
-            "spearman_horizon": float(rho_horizon),
-            "spearman_policy_means": float(rho_policy), "rows": rows}
+    rows = scored(rollouts(env, run_policies(run), episodes), nets, env.max_steps)
+    return {"run": str(run), "task": spec.name, "algorithm": nets.kind, "setting": setting(spec),
+            **correlations(rows), "rows": rows}
+
+
+def check_pool(reward_runs: list[Path], pool: list[Path], episodes: int) -> list[dict]:
+    """Each run's learned reward on the policies of the pool's runs of its task but its own (none trained on it)."""
+    from rich.progress import track
+
+    from fastrl.env import FastEnv
+    from fastrl.irl.export import load_networks
+    from fastrl.spec import load_spec
+
+    nets = {}
+    for run in reward_runs:
+        try:
+            nets[run] = load_networks(run / "networks")
+        except (OSError, ValueError, KeyError) as err:  # an unfinished or damaged run: report it, check the rest
+            print(f"skipping {run}: no learned reward to check ({err})")
+    reward_runs = [run for run in reward_runs if run in nets]
+    specs = {run: load_spec(run / "spec.yaml") for run in {*reward_runs, *pool}}
+    results = []
+    for task in dict.fromkeys(specs[run].name for run in reward_runs):
+        members = [run for run in pool if specs[run].name == task]
+        if not members:
+            raise SystemExit(f"the pool has no run of {task}")
+        first = members[0]
+        for run in [*members, *(r for r in reward_runs if specs[r].name == task)]:
+            if (specs[run].observation, specs[run].reward) != (specs[first].observation, specs[first].reward):
+                raise SystemExit(f"{run}: observation or reward differs from {first}'s: returns not comparable")
+        env = FastEnv(specs[first])
+        by_seed = {specs[run].train.seed: run for run in reversed(members)}  # one untrained policy per seed
+        rows: dict[str, list[dict]] = {}
+        for seed, run in sorted(by_seed.items()):
+            name = f"untrained-s{seed}"
+            rows[name] = [r | {"policy_run": name} for r in rollouts(env, {0: untrained_policy(specs[run])}, episodes)]
+        for run in track(members, description=f"{task}: rolling out the pool"):
+            rows[str(run)] = [r | {"policy_run": str(run)}
+                              for r in rollouts(env, run_policies(run, untrained=False), episodes)]
+        for run in (r for r in reward_runs if specs[r].name == task):
+            held_out = [r for name, group in rows.items() if name != str(run) for r in group]
+            rows_scored = scored(held_out, nets[run], env.max_steps)
+            results.append({"run": str(run), "task": task, "algorithm": nets[run].kind, "setting": setting(specs[run]),
+                            "pool": True,
+                            **correlations(rows_scored, key=lambda r: (r["policy_run"], r["policy_steps"])),
+                            "rows": rows_scored})
+    return results
 
 
 def training_seed(result: dict) -> int | None:
     """The training seed from the run directory's name (...-s<seed>)."""
     m = re.search(r"-s(\d+)$", result["run"].rstrip("/"))
     return int(m.group(1)) if m else None
+
+
+def label(result: dict) -> str:
+    """The algorithm, and whether its reward was scored on the pool of other runs' policies."""
+    return result["algorithm"].upper() + (" on the pool" if result.get("pool") else "")
 
 
 def print_tables(results: list[dict]) -> None:
@@ -95,21 +190,24 @@ def print_tables(results: list[dict]) -> None:
     print("|---|---|---|---|---|---|---|---|")
     for r in results:
         horizon = f"{r['spearman_horizon']:.3f}" if "spearman_horizon" in r else "-"  # not in older results
-        print(f"| {r['task']} | {r['algorithm'].upper()} | {training_seed(r)} | {r['policies']} x "
+        print(f"| {r['task']} | {label(r)} | {training_seed(r)} | {r['policies']} x "
               f"{r['rollouts'] // r['policies']} | {r['spearman']:.3f} | {r['spearman_sum']:.3f} | {horizon} | "
               f"{r['spearman_policy_means']:.3f} |")
     groups: dict[tuple, list[dict]] = {}
     for r in results:
-        groups.setdefault((r["task"], r["algorithm"]), []).append(r)
+        groups.setdefault((r["task"], label(r), r.get("setting")), []).append(r)
     if all(len(g) == 1 for g in groups.values()):
         return
-    print("\n| task | algorithm | seeds | rho, mean ± sd | per seed | runs at >= 0.8 |")
-    print("|---|---|---|---|---|---|")
-    for (task, algo), g in groups.items():
+    print("\n| task | algorithm | runs of (first run's folder) | seeds | rho, mean ± sd | per seed | runs at >= 0.8 | "
+          "rho to the time limit, per seed |")
+    print("|---|---|---|---|---|---|---|---|")
+    for (task, algo, _), g in groups.items():
         rhos = np.array([r["spearman"] for r in g])
         per_seed = ", ".join(f"{r['spearman']:.2f}" for r in g)
-        print(f"| {task} | {algo.upper()} | {len(g)} | {rhos.mean():.2f} ± {rhos.std():.2f} | {per_seed} | "
-              f"{int((rhos >= 0.8).sum())} of {len(g)} |")
+        horizon = ", ".join(f"{r['spearman_horizon']:.2f}" if "spearman_horizon" in r else "-" for r in g)
+        folder = Path(g[0]["run"]).parent.parent.name
+        print(f"| {task} | {algo} | {folder} | {len(g)} | {rhos.mean():.2f} ± {rhos.std():.2f} | {per_seed} | "
+              f"{int((rhos >= 0.8).sum())} of {len(g)} | {horizon} |")
 
 
 def main() -> None:
@@ -120,21 +218,27 @@ def main() -> None:
     ap.add_argument("--figure", default="docs/irl_reward_check.png")
     ap.add_argument("--from-json", nargs="*", type=Path, default=[], metavar="JSON",
                     help="also take the results an earlier call wrote beside its figure (no rollouts)")
+    ap.add_argument("--pool", nargs="*", type=Path, metavar="RUN",
+                    help="score each run's reward on the checkpoints of these runs of its task (PPO, BC, GAIL, AIRL; "
+                         "without RUN: the runs above), leaving out its own: policies not trained against it")
     args = ap.parse_args()
     if not args.runs and not args.from_json:
         ap.error("give run directories, or --from-json with earlier results")
     print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load {os.getloadavg()[0]:.1f}")
     results = [r for f in args.from_json for r in json.loads(f.read_text())]
-    results += [check(run, args.episodes) for run in args.runs]
-    results.sort(key=lambda r: (r["task"], r["algorithm"], training_seed(r) or 0))
+    if args.pool is not None:
+        results += check_pool(args.runs, args.pool or args.runs, args.episodes)
+    else:
+        results += [check(run, args.episodes) for run in args.runs]
+    results.sort(key=lambda r: (r["task"], label(r), r.get("setting", ""), training_seed(r) or 0))
     print_tables(results)
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    shown = list({(r["task"], r["algorithm"]): r for r in reversed(results)}.values())[::-1]  # lowest seed each
+    shown = list({(r["task"], label(r)): r for r in reversed(results)}.values())[::-1]  # lowest seed each
     cols = min(len(shown), 3)
     rows = -(-len(shown) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.8 * rows), squeeze=False)
