@@ -210,6 +210,30 @@ def print_tables(results: list[dict]) -> None:
               f"{int((rhos >= 0.8).sum())} of {len(g)} | {horizon} |")
 
 
+def scatter_figure(shown: list[dict], out: Path) -> None:
+    """Learned against heuristic return, one panel per run shown, coloured by the policy's training steps."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cols = min(len(shown), 3)
+    rows = -(-len(shown) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.8 * rows), squeeze=False)
+    for ax in axes.flat[len(shown):]:
+        ax.set_visible(False)
+    for ax, r in zip(axes.flat, shown):
+        steps = np.array([x["policy_steps"] for x in r["rows"]])
+        sc = ax.scatter([x["heuristic"] for x in r["rows"]], [x["learned"] for x in r["rows"]], c=steps, s=14,
+                        cmap="viridis")
+        ax.set(title=f"{r['task']} {label(r)}: rho {r['spearman']:.2f}", xlabel="heuristic return",
+               ylabel="learned return")
+        fig.colorbar(sc, ax=ax, label="policy training steps")
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+
+
 def main() -> None:
     """Check every run given (or read earlier results), print the tables, write JSON and a figure."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -221,6 +245,8 @@ def main() -> None:
     ap.add_argument("--pool", nargs="*", type=Path, metavar="RUN",
                     help="score each run's reward on the checkpoints of these runs of its task (PPO, BC, GAIL, AIRL; "
                          "without RUN: the runs above), leaving out its own: policies not trained against it")
+    ap.add_argument("--no-rows", action="store_true",
+                    help="write each run's figures but not its per-rollout rows into the JSON (the figure keeps them)")
     args = ap.parse_args()
     if not args.runs and not args.from_json:
         ap.error("give run directories, or --from-json with earlier results")
@@ -233,30 +259,14 @@ def main() -> None:
         results += [check(run, args.episodes) for run in args.runs]
     results.sort(key=lambda r: (r["task"], label(r), r.get("setting", ""), training_seed(r) or 0))
     print_tables(results)
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    shown = list({(r["task"], label(r)): r for r in reversed(results)}.values())[::-1]  # lowest seed each
-    cols = min(len(shown), 3)
-    rows = -(-len(shown) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.8 * rows), squeeze=False)
-    for ax in axes.flat[len(shown):]:
-        ax.set_visible(False)
-    for ax, r in zip(axes.flat, shown):
-        steps = np.array([x["policy_steps"] for x in r["rows"]])
-        sc = ax.scatter([x["heuristic"] for x in r["rows"]], [x["learned"] for x in r["rows"]], c=steps, s=14,
-                        cmap="viridis")
-        ax.set(title=f"{r['task']} {r['algorithm'].upper()}: rho {r['spearman']:.2f}", xlabel="heuristic return",
-               ylabel="learned return")
-        fig.colorbar(sc, ax=ax, label="policy training steps")
-    fig.tight_layout()
+    shown = list({(r["task"], label(r)): r for r in reversed(results) if "rows" in r}.values())[::-1]  # lowest seed
+    if shown:
+        scatter_figure(shown, Path(args.figure))
+    if args.no_rows:
+        results = [{k: v for k, v in r.items() if k != "rows"} for r in results]
     out = Path(args.figure)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
     out.with_suffix(".json").write_text(json.dumps(results, indent=2))
-    print(f"figure: {out}")
+    print(f"figure: {out}" if shown else f"results: {out.with_suffix('.json')}")
 
 
 if __name__ == "__main__":
