@@ -41,6 +41,7 @@ def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
     res = invoke(["irl", str(spec_file("tracelines")), "--algorithm", algorithm, "--timesteps", "512",
                   *sets(extra)], tmp_path)
     assert res.exit_code == 0, res.output
+    assert ("goes without it" in res.output) is (suffix == "-airl-sac-s0")  # the spec's ranking prior: PPO AIRL's
     run = only_run(tmp_path)
     assert run.name.endswith(suffix)
     demos = sorted((run / "demos").glob("*.npz"))
@@ -72,7 +73,7 @@ def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
     assert any("irl/disc_accuracy" in e for e in entities) and any("eval/subtasks" in e for e in entities)
 
 
-def test_airl_with_the_ranking_prior_logs_its_loss_and_gail_says_it_ignores_it(tmp_path):
+def test_airl_with_the_ranking_prior_logs_its_loss_and_gail_goes_without_it(tmp_path):
     ranking = ["irl.discriminator.ranking=1", "irl.discriminator.ranking_noise=[0, 1]",
                "irl.discriminator.ranking_episodes=1"]
     res = invoke(["irl", str(spec_file("tracelines")), "--algorithm", "airl", "--timesteps", "256", *sets(ranking)],
@@ -84,7 +85,7 @@ def test_airl_with_the_ranking_prior_logs_its_loss_and_gail_says_it_ignores_it(t
     res = invoke(["irl", str(spec_file("tracelines")), "--algorithm", "gail", "--timesteps", "256", *sets(ranking)],
                  tmp_path / "gail")
     assert res.exit_code == 0, res.output
-    assert "ranking applies to shaped AIRL on PPO only" in res.output
+    assert "irl.discriminator.ranking" not in res.output  # the shipped specs set the prior: GAIL goes without a word
     rows = (only_run(tmp_path / "gail") / "metrics.jsonl").read_text()
     assert "irl/ranking_loss" not in rows
 

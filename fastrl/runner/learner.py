@@ -116,8 +116,9 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     ranked = None
     if d.ranking and disc.shaped and not off_policy:
         ranked = RankedRollouts(env, d.ranking_noise, d.ranking_episodes, repeat=d.ranking_repeat)
-    elif d.ranking:
-        console.print("[yellow]irl.discriminator.ranking applies to shaped AIRL on PPO only: ignored[/]")
+    elif d.ranking and irl.algorithm == "airl":  # GAIL has no r_psi to rank, so it goes without a word
+        console.print("[dim]irl.discriminator.ranking: the ranking prior is for shaped AIRL on PPO; "
+                      "this run goes without it[/]")
     if off_policy:
         cb = OffPolicyAdversarialCallback(disc, transitions, d.current_rollout, d.steps, d.batch_size,
                                           d.learning_rate, spec.train.seed, d.every, d.gradient_penalty)

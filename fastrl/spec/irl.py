@@ -48,7 +48,7 @@ class DiscriminatorSettings(Strict):
                                      "Off by default: without the clock r_psi no longer ranks ImageCentring trainees")
     ranking: float = Field(0.0, ge=0, description="shaped AIRL on PPO: weight of a ranking loss on r_psi (D-REX): "
                            "over snippets of the scripted expert whose actions are random at `ranking_noise` rates, "
-                           "less noise must sum higher; 0: none")
+                           "less noise must sum higher; 0: none (GAIL and a SAC generator go without it)")
     ranking_noise: list[Annotated[float, Field(ge=0, le=1)]] = Field(
         [0.0, 0.25, 0.5, 0.75, 1.0], min_length=2, description="random-action rates of the ranking rollouts")
     ranking_episodes: int = Field(4, ge=1, description="ranking rollouts per noise rate")
