@@ -212,6 +212,7 @@ def print_tables(results: list[dict]) -> None:
 
 def scatter_figure(shown: list[dict], out: Path) -> None:
     """Learned against heuristic return, one panel per run shown, coloured by the policy's training steps."""
+    several = len({r.get("setting") for r in shown}) > len({(r["task"], label(r)) for r in shown})
     import matplotlib
 
     matplotlib.use("Agg")
@@ -223,12 +224,13 @@ def scatter_figure(shown: list[dict], out: Path) -> None:
     for ax in axes.flat[len(shown):]:
         ax.set_visible(False)
     for ax, r in zip(axes.flat, shown):
-        steps = np.array([x["policy_steps"] for x in r["rows"]])
+        steps = np.array([x["policy_steps"] for x in r["rows"]]) / 1000
         sc = ax.scatter([x["heuristic"] for x in r["rows"]], [x["learned"] for x in r["rows"]], c=steps, s=14,
                         cmap="viridis")
-        ax.set(title=f"{r['task']} {label(r)}: rho {r['spearman']:.2f}", xlabel="heuristic return",
-               ylabel="learned return")
-        fig.colorbar(sc, ax=ax, label="policy training steps")
+        folder = f" ({Path(r['run']).parent.parent.name})" if several else ""
+        ax.set_title(f"{r['task']} {label(r)}{folder}\nseed {training_seed(r)}: rho {r['spearman']:.3f}", fontsize=9)
+        ax.set(xlabel="heuristic return", ylabel="learned return")
+        fig.colorbar(sc, ax=ax, label="policy training steps (thousands)")
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=110)
@@ -259,7 +261,8 @@ def main() -> None:
         results += [check(run, args.episodes) for run in args.runs]
     results.sort(key=lambda r: (r["task"], label(r), r.get("setting", ""), training_seed(r) or 0))
     print_tables(results)
-    shown = list({(r["task"], label(r)): r for r in reversed(results) if "rows" in r}.values())[::-1]  # lowest seed
+    shown = list({(r["task"], label(r), r.get("setting")): r
+                  for r in reversed(results) if "rows" in r}.values())[::-1]  # the lowest seed of each setting
     if shown:
         scatter_figure(shown, Path(args.figure))
     if args.no_rows:
