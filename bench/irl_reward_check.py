@@ -134,7 +134,7 @@ def check_pool(reward_runs: list[Path], pool: list[Path], episodes: int) -> list
 
     from fastrl.env import FastEnv
     from fastrl.irl.export import load_networks
-    from fastrl.spec import load_spec
+    from fastrl.spec import SpecError, load_spec
 
     nets = {}
     for run in reward_runs:
@@ -143,7 +143,13 @@ def check_pool(reward_runs: list[Path], pool: list[Path], episodes: int) -> list
         except (OSError, ValueError, KeyError) as err:  # an unfinished or damaged run: report it, check the rest
             print(f"skipping {run}: no learned reward to check ({err})")
     reward_runs = [run for run in reward_runs if run in nets]
-    specs = {run: load_spec(run / "spec.yaml") for run in {*reward_runs, *pool}}
+    specs = {}
+    for run in dict.fromkeys([*reward_runs, *pool]):
+        try:
+            specs[run] = load_spec(run / "spec.yaml")
+        except SpecError as err:  # not a run directory, or its spec is damaged: report it, use the rest
+            print(f"skipping {run}: {err}")
+    reward_runs, pool = [r for r in reward_runs if r in specs], [r for r in pool if r in specs]
     results = []
     for task in dict.fromkeys(specs[run].name for run in reward_runs):
         members = [run for run in pool if specs[run].name == task]
