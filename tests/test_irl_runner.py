@@ -44,6 +44,8 @@ def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
     assert ("goes without it" in res.output) is (suffix == "-airl-sac-s0")  # the spec's ranking prior: PPO AIRL's
     run = only_run(tmp_path)
     assert run.name.endswith(suffix)
+    metrics = run / "metrics.jsonl"  # BC trains offline and logs none
+    assert (metrics.exists() and "irl/ranking_loss" in metrics.read_text()) is (suffix == "-airl-ppo-s0")
     demos = sorted((run / "demos").glob("*.npz"))
     assert len(demos) == 2
     ev = json.loads((run / "eval.json").read_text())
