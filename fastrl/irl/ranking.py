@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from ..agents.expert import ScriptedExpert
-from .discriminator import Discriminator, augment
+from .discriminator import Discriminator, absorbing_states, augment
 
 
 def noisy_expert_rollout(env, expert: ScriptedExpert, noise: float, seed: int, repeat: int = 1
@@ -62,8 +62,7 @@ class RankedRollouts:
         n, h, d = self.raw.shape
         s = augment(torch.as_tensor(normalize(self.raw.reshape(n * h, d)), dtype=torch.float32)).reshape(n, h, d + 1)
         flag = torch.as_tensor(self.absorbed)
-        s[flag] = 0.0
-        s[..., -1] = flag.float()
+        s[flag] = absorbing_states(int(flag.sum()), d)
         return s
 
     def loss(self, disc: Discriminator, states: torch.Tensor, rng: np.random.Generator, pairs: int = 32
