@@ -11,8 +11,9 @@ pickle: AIRL r_psi(s), GAIL log D - log(1 - D), discounted with the generator's 
 the episode ended in success. Prints Spearman's rho over rollouts (and, for reference, with the undiscounted
 sum of learned rewards without the tail; undiscounted to the time limit, a finished episode's remaining steps
 at the absorbing state's reward, as the heuristic return is undiscounted; and over per-policy mean returns),
-then, where a task and algorithm have runs of several training seeds, rho's mean ± sd over them; writes the
-results as JSON and a scatter figure (the lowest seed of each task and algorithm).
+then, where a task and algorithm have runs of several training seeds, rho's mean ± sd over them; then rho
+against the heuristic return less each of its weighted terms in turn, which shows the term the learned reward
+prices differently; writes the results as JSON and a scatter figure (the lowest seed of each task and algorithm).
 
 With --pool, each reward is scored instead on the checkpoints of the pool's runs of its task (PPO on the
 heuristic, BC, GAIL, AIRL, any seed) but its own, plus one untrained policy per training seed: policies its
@@ -36,16 +37,20 @@ import numpy as np
 from scipy.stats import spearmanr
 
 
-def rollout(env, policy, seed: int) -> tuple[np.ndarray, float, bool]:
-    """Observations, heuristic return and success of one deterministic episode."""
+def rollout(env, policy, seed: int) -> tuple[np.ndarray, float, bool, dict[str, float]]:
+    """Observations, heuristic return, success and each weighted term's share of the return, of one episode."""
     obs, _ = env.reset(seed=seed)
     observations, total, done, info = [obs], 0.0, False, {}
+    weights = dict(zip(env.feature_names, env.weights))
+    terms = dict.fromkeys(weights, 0.0)
     while not done:
         obs, reward, term, trunc, info = env.step(policy(obs))
         observations.append(obs)
         total += reward
+        for name, value in info["features"].items():
+            terms[name] += weights[name] * value
         done = term or trunc
-    return np.array(observations), total, bool(info.get("success", False))
+    return np.array(observations), total, bool(info.get("success", False)), terms
 
 
 def untrained_policy(spec):
@@ -76,8 +81,8 @@ def rollouts(env, policies: dict[int, object], episodes: int) -> list[dict]:
     rows = []
     for steps, policy in policies.items():
         for seed in range(20000, 20000 + episodes):
-            obs, heuristic, success = rollout(env, policy, seed)
-            rows.append({"policy_steps": steps, "seed": seed, "heuristic": heuristic,
+            obs, heuristic, success, terms = rollout(env, policy, seed)
+            rows.append({"policy_steps": steps, "seed": seed, "heuristic": heuristic, "terms": terms,
                          "success": success, "steps": len(obs) - 1, "obs": obs})
     return rows
 
@@ -104,7 +109,16 @@ def correlations(rows: list[dict], key=lambda r: r["policy_steps"]) -> dict:
     policies = list(dict.fromkeys(key(r) for r in rows))
     mean_of = lambda f: [np.mean([r[f] for r in rows if key(r) == p]) for p in policies]  # noqa: E731
     rho["spearman_policy_means"] = float(spearmanr(mean_of("heuristic"), mean_of("learned")).statistic)
-    return {"policies": len(policies), "rollouts": len(rows), **rho}
+    return {"policies": len(policies), "rollouts": len(rows), **rho, "spearman_without": without_terms(rows)}
+
+
+def without_terms(rows: list[dict]) -> dict[str, float]:
+    """rho of the learned return against the heuristic return less one weighted term, for each term that varies."""
+    if not rows or "terms" not in rows[0]:
+        return {}
+    learned = [r["learned"] for r in rows]
+    return {name: float(spearmanr([r["heuristic"] - r["terms"][name] for r in rows], learned).statistic)
+            for name in rows[0]["terms"] if np.ptp([r["terms"][name] for r in rows]) > 0}
 
 
 def setting(spec) -> str:
@@ -216,6 +230,22 @@ def print_tables(results: list[dict]) -> None:
               f"{int((rhos >= 0.8).sum())} of {len(g)} | {horizon} |")
 
 
+def print_without_terms(results: list[dict]) -> None:
+    """Per run: rho against the heuristic return less each term in turn (which term the learned reward prices
+    differently)."""
+    results = [r for r in results if r.get("spearman_without")]
+    for task in dict.fromkeys(r["task"] for r in results):
+        rows = [r for r in results if r["task"] == task]
+        terms = list(dict.fromkeys(t for r in rows for t in r["spearman_without"]))
+        print(f"\n{task}: rho against the heuristic return less one term\n")
+        print("| algorithm | run | seed | rho | " + " | ".join(f"less {t}" for t in terms) + " |")
+        print("|---|---|---|---|" + "---|" * len(terms))
+        for r in rows:
+            cells = " | ".join(f"{r['spearman_without'][t]:.3f}" if t in r["spearman_without"] else "-" for t in terms)
+            print(f"| {label(r)} | {Path(r['run']).parent.parent.name} | {training_seed(r)} | {r['spearman']:.3f} | "
+                  f"{cells} |")
+
+
 def scatter_figure(shown: list[dict], out: Path) -> None:
     """Learned against heuristic return, one panel per run shown, coloured by the policy's training steps."""
     several = len({r.get("setting") for r in shown}) > len({(r["task"], label(r)) for r in shown})
@@ -267,6 +297,7 @@ def main() -> None:
         results += [check(run, args.episodes) for run in args.runs]
     results.sort(key=lambda r: (r["task"], label(r), r.get("setting", ""), training_seed(r) or 0))
     print_tables(results)
+    print_without_terms(results)
     shown = list({(r["task"], label(r), r.get("setting")): r
                   for r in reversed(results) if "rows" in r}.values())[::-1]  # the lowest seed of each setting
     if shown:

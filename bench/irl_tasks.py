@@ -92,14 +92,17 @@ def report(args) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows, fig = [], plt.figure(figsize=(13, 3.8))
+    present = [task for task in TASKS if any((Path(args.root) / task).glob("*/eval.json"))]
+    if not present:
+        raise SystemExit(f"no finished runs under {args.root}")
+    rows, fig = [], plt.figure(figsize=(4.4 * len(present), 3.8))
     print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"{platform.python_version()}; root {args.root}")
     print("| task | algorithm | steps to 90% of expert | wall time to 90% | steps trained | train time | "
           "final success | final subtasks (expert) |")
     print("|---|---|---|---|---|---|---|---|")
-    for k, task in enumerate(TASKS):
-        ax = fig.add_subplot(1, 3, k + 1)
+    for k, task in enumerate(present):  # a panel per task that has runs
+        ax = fig.add_subplot(1, len(present), k + 1)
         runs = sorted((f.parent for f in (Path(args.root) / task).glob("*/eval.json")),
                       key=lambda d: (ALGOS.index(algo_of(d)), d.name))  # same order and colours in every panel
         for run_dir in runs:
@@ -125,7 +128,9 @@ def report(args) -> None:
             if algo == "bc":  # no training loop: its final evaluation, as a level
                 ax.axhline(row["final_subtasks"], color="black", ls="--", lw=1, label="BC (20 demos)")
             else:
-                ax.plot([0, *steps], [0, *subs], marker=".", label=algo.upper(), color=f"C{ALGOS.index(algo)}")
+                seen = algo.upper() in ax.get_legend_handles_labels()[1]  # one legend entry per algorithm
+                ax.plot([0, *steps], [0, *subs], marker=".", label=None if seen else algo.upper(),
+                        color=f"C{ALGOS.index(algo)}")
         ax.axhline(0.9, color="grey", ls=":", lw=1)
         ax.set(title=task, xlabel="environment steps", ylabel="subtasks completed (10 eval seeds)", ylim=(-0.02, 1.02))
         ax.xaxis.set_major_formatter(lambda x, _: f"{x / 1e6:g}M" if x >= 1e6 else f"{x / 1e3:g}k" if x else "0")
