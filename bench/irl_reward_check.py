@@ -205,12 +205,13 @@ def label(result: dict) -> str:
 
 def print_tables(results: list[dict]) -> None:
     """One row per run; then, where a task and algorithm have several runs (seeds), mean ± sd over them."""
-    print("| task | algorithm | seed | policies x episodes | Spearman rho (learned return vs heuristic) | "
+    print("| task | algorithm | runs of | seed | policies x episodes | Spearman rho (learned return vs heuristic) | "
           "rho, undiscounted sum without tail | rho, undiscounted to the time limit | rho of per-policy means |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|")
     for r in results:
         horizon = f"{r['spearman_horizon']:.3f}" if "spearman_horizon" in r else "-"  # not in older results
-        print(f"| {r['task']} | {label(r)} | {training_seed(r)} | {r['policies']} x "
+        folder = Path(r["run"]).parent.parent.name
+        print(f"| {r['task']} | {label(r)} | {folder} | {training_seed(r)} | {r['policies']} x "
               f"{r['rollouts'] // r['policies']} | {r['spearman']:.3f} | {r['spearman_sum']:.3f} | {horizon} | "
               f"{r['spearman_policy_means']:.3f} |")
     groups: dict[tuple, list[dict]] = {}
