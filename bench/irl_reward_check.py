@@ -7,7 +7,8 @@
 For each run (GAIL or AIRL, with networks/ and checkpoints/): the untrained policy (same seed) and every saved
 checkpoint are rolled out deterministically on held-out seeds (20000, 20001, ...). Each rollout is scored by the
 spec's heuristic return (sum of w . phi) and by the learned reward saved in networks/reward.pt, loaded without
-pickle: AIRL r_psi(s), GAIL log D - log(1 - D), discounted with the generator's gamma plus the absorbing tail if
+pickle: AIRL r_psi(s) (averaged over the copies saved during training, if the run saved them; --final: the
+final r_psi alone), GAIL log D - log(1 - D), discounted with the generator's gamma plus the absorbing tail if
 the episode ended in success. Prints Spearman's rho over rollouts (and, for reference, with the undiscounted
 sum of learned rewards without the tail; undiscounted to the time limit, a finished episode's remaining steps
 at the absorbing state's reward, as the heuristic return is undiscounted; and over per-policy mean returns),
@@ -128,21 +129,21 @@ def setting(spec) -> str:
     return spec_hash(spec.model_copy(update={"train": spec.train.model_copy(update={"seed": 0})}))
 
 
-def check(run: Path, episodes: int) -> dict:
+def check(run: Path, episodes: int, averaged: bool = True) -> dict:
     """Rollouts of every saved policy of a run, both returns, and their rank correlation."""
     from fastrl.env import FastEnv
     from fastrl.irl.export import load_networks
     from fastrl.spec import load_spec
 
     spec = load_spec(run / "spec.yaml")
-    nets = load_networks(run / "networks")
+    nets = load_networks(run / "networks", averaged)
     env = FastEnv(spec)
     rows = scored(rollouts(env, run_policies(run), episodes), nets, env.max_steps)
     return {"run": str(run), "task": spec.name, "algorithm": nets.kind, "setting": setting(spec),
-            **correlations(rows), "rows": rows}
+            "reward_members": nets.reward_members, **correlations(rows), "rows": rows}
 
 
-def check_pool(reward_runs: list[Path], pool: list[Path], episodes: int) -> list[dict]:
+def check_pool(reward_runs: list[Path], pool: list[Path], episodes: int, averaged: bool = True) -> list[dict]:
     """Each run's learned reward on the policies of the pool's runs of its task but its own (none trained on it)."""
     from rich.progress import track
 
@@ -153,7 +154,7 @@ def check_pool(reward_runs: list[Path], pool: list[Path], episodes: int) -> list
     nets = {}
     for run in reward_runs:
         try:
-            nets[run] = load_networks(run / "networks")
+            nets[run] = load_networks(run / "networks", averaged)
         except (OSError, ValueError, KeyError) as err:  # an unfinished or damaged run: report it, check the rest
             print(f"skipping {run}: no learned reward to check ({err})")
     reward_runs = [run for run in reward_runs if run in nets]
@@ -186,7 +187,7 @@ def check_pool(reward_runs: list[Path], pool: list[Path], episodes: int) -> list
             held_out = [r for name, group in rows.items() if name != str(run) for r in group]
             rows_scored = scored(held_out, nets[run], env.max_steps)
             results.append({"run": str(run), "task": task, "algorithm": nets[run].kind, "setting": setting(specs[run]),
-                            "pool": True,
+                            "pool": True, "reward_members": nets[run].reward_members,
                             **correlations(rows_scored, key=lambda r: (r["policy_run"], r["policy_steps"])),
                             "rows": rows_scored})
     return results
@@ -199,8 +200,9 @@ def training_seed(result: dict) -> int | None:
 
 
 def label(result: dict) -> str:
-    """The algorithm, and whether its reward was scored on the pool of other runs' policies."""
-    return result["algorithm"].upper() + (" on the pool" if result.get("pool") else "")
+    """The algorithm, whether its reward is AIRL's average over training, and whether it was scored on the pool."""
+    averaged = " (average)" if result.get("reward_members", 1) > 1 else ""
+    return result["algorithm"].upper() + averaged + (" on the pool" if result.get("pool") else "")
 
 
 def print_tables(results: list[dict]) -> None:
@@ -284,6 +286,8 @@ def main() -> None:
     ap.add_argument("--pool", nargs="*", type=Path, metavar="RUN",
                     help="score each run's reward on the checkpoints of these runs of its task (PPO, BC, GAIL, AIRL; "
                          "without RUN: the runs above), leaving out its own: policies not trained against it")
+    ap.add_argument("--final", action="store_true",
+                    help="score AIRL's final r_psi alone, not its average over the copies saved during training")
     ap.add_argument("--no-rows", action="store_true",
                     help="write each run's figures but not its per-rollout rows into the JSON (the figure keeps them)")
     args = ap.parse_args()
@@ -293,9 +297,9 @@ def main() -> None:
           f"load {os.getloadavg()[0]:.1f}")
     results = [r for f in args.from_json for r in json.loads(f.read_text())]
     if args.pool is not None:
-        results += check_pool(args.runs, args.pool or args.runs, args.episodes)
+        results += check_pool(args.runs, args.pool or args.runs, args.episodes, not args.final)
     else:
-        results += [check(run, args.episodes) for run in args.runs]
+        results += [check(run, args.episodes, not args.final) for run in args.runs]
     results.sort(key=lambda r: (r["task"], label(r), r.get("setting", ""), training_seed(r) or 0))
     print_tables(results)
     print_without_terms(results)

@@ -12,7 +12,7 @@ from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.env import FastEnv
 from fastrl.irl import Discriminator
 from fastrl.irl.discriminator import absorbing_states, augment
-from fastrl.irl.export import load_networks, save_networks
+from fastrl.irl.export import load_networks, reward_snapshot, save_networks
 from fastrl.spec import load_spec
 
 from .conftest import spec_file
@@ -60,9 +60,9 @@ def sac_run():
 
 
 def spectral_disc(obs_dim: int, kind: str, absorbing: bool = True, shaped: bool = True, inputs=None,
-                  reward_inputs=None) -> Discriminator:
+                  reward_inputs=None, seed: int = 1) -> Discriminator:
     """A spectrally normalised discriminator after a few training steps (weights and power iterates moved)."""
-    torch.manual_seed(1)
+    torch.manual_seed(seed)
     disc = Discriminator(obs_dim, kind, GAMMA, hidden=(16, 16), spectral=True, absorbing=absorbing, shaped=shaped,
                          inputs=inputs, reward_inputs=reward_inputs)
     opt = torch.optim.Adam(disc.parameters(), lr=1e-2)
@@ -187,6 +187,39 @@ def test_learned_return_adds_the_absorbing_value_only_when_terminated(ppo_run, t
     short = obs[:4]  # a short episode: the absorbing value weighs more
     diff = nets.learned_return(short, True, gamma=0.5) - nets.learned_return(short, False, gamma=0.5)
     assert diff == pytest.approx(0.5 ** 3 * r_abs / 0.5, rel=1e-5)
+
+
+def test_an_averaged_reward_is_the_mean_of_its_members_each_under_its_own_normalisation(ppo_run, tmp_path):
+    model, venv, obs = ppo_run
+    d = obs.shape[1]
+    early, final = spectral_disc(d, "airl", seed=2), spectral_disc(d, "airl", seed=3)
+    snapshots = [reward_snapshot(early, venv)]
+    saved_mean = venv.obs_rms.mean.copy()
+    try:
+        venv.obs_rms.mean = saved_mean + 0.5  # the statistics move on after the snapshot
+        save_networks(tmp_path, model, venv, final, GAMMA, [*snapshots, reward_snapshot(final, venv)])
+        s_final = normalized_states(venv, obs)
+    finally:
+        venv.obs_rms.mean = saved_mean
+    s_early = normalized_states(venv, obs)
+    early.eval()
+    final.eval()
+    nets, last = load_networks(tmp_path), load_networks(tmp_path, averaged=False)
+    assert (nets.reward_members, last.reward_members) == (2, 1)  # the snapshot equal to the final one is dropped
+    with torch.no_grad():
+        r_early, r_final = early.reward(s_early[:-1]).numpy(), final.reward(s_final[:-1]).numpy()
+        h_early, h_final = early.potential(s_early).numpy(), final.potential(s_final).numpy()
+        r_abs = [float(early.r_absorbing), float(final.r_absorbing)]
+    assert not np.allclose(r_early, r_final, atol=1e-2)
+    np.testing.assert_allclose(nets.reward(obs), (r_early + r_final) / 2, atol=1e-5)
+    np.testing.assert_allclose(nets.potential(obs), (h_early + h_final) / 2, atol=1e-5)
+    np.testing.assert_allclose(last.reward(obs), r_final, atol=1e-5)
+    assert nets.absorbing_reward() == pytest.approx(np.mean(r_abs), rel=1e-5)
+    meta = json.loads((tmp_path / "reward.json").read_text())
+    meta["average"]["members"] = 3  # a member whose tensors are missing
+    (tmp_path / "reward.json").write_text(json.dumps(meta))
+    with pytest.raises(ValueError, match="reward.json.*average.2"):
+        load_networks(tmp_path)
 
 
 def test_without_absorbing_states_termination_adds_nothing(ppo_run, tmp_path):

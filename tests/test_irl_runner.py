@@ -129,6 +129,30 @@ def test_run_with_an_irl_section_resumes_with_its_discriminator(tmp_path):
     assert json.loads((run / "meta.json").read_text())["trained_timesteps"] >= 512
 
 
+def test_the_averaged_reward_survives_a_resume_and_leaves_training_as_it_was(tmp_path):
+    average = ["irl.algorithm=airl", "irl.discriminator.average_every=128"]  # rollouts of 128 steps
+    for name, extra in (("whole", average), ("plain", ["irl.algorithm=airl", "irl.discriminator.average_every=0"])):
+        res = invoke(["run", str(spec_file("tracelines")), "--timesteps", "512", *sets(extra)], tmp_path / name)
+        assert res.exit_code == 0, res.output
+    res = invoke(["run", str(spec_file("tracelines")), "--timesteps", "256", *sets(average)], tmp_path / "resumed")
+    assert res.exit_code == 0, res.output
+    resumed = only_run(tmp_path / "resumed")
+    res = CliRunner().invoke(app, ["run", "--resume", str(resumed), "--timesteps", "512", "--no-progress"])
+    assert res.exit_code == 0, res.output
+    whole, plain = only_run(tmp_path / "whole"), only_run(tmp_path / "plain")
+    # copies at 128, 256 (saved in the checkpoint the resume starts from) and 384; the one at 512 is the final
+    assert [load_networks(r / "networks").reward_members for r in (whole, resumed, plain)] == [4, 4, 1]
+    agent = [json.loads((r / "eval.json").read_text())["agent"] for r in (whole, plain)]
+    assert agent[0] == agent[1]
+    nets = {r: load_networks(r / "networks") for r in (whole, plain)}
+    traj = Trajectory.load(sorted((whole / "demos").glob("*.npz"))[0])
+    obs, _, _ = replay(FastEnv(load_spec(whole / "spec.yaml")), traj)
+    np.testing.assert_array_equal(nets[whole].value(obs), nets[plain].value(obs))  # the same generator
+    final = load_networks(whole / "networks", averaged=False)
+    np.testing.assert_allclose(final.reward(obs), nets[plain].reward(obs), atol=1e-6)  # the same discriminator
+    assert not np.allclose(nets[whole].reward(obs), nets[plain].reward(obs), atol=1e-3)
+
+
 def test_resuming_with_a_discriminator_the_spec_no_longer_builds_is_a_clear_error(tmp_path):
     res = invoke(["run", str(spec_file("tracelines")), "--timesteps", "256",
                   *sets(["irl.algorithm=gail", "irl.discriminator.ignore=[]"])], tmp_path)

@@ -107,8 +107,8 @@ def load_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv | None, parts
         saved = torch.load(path / "parts.pt", map_location="cpu", weights_only=True)
         for name, part in parts.items():
             try:
-                part.load_state_dict(saved[name])
-            except RuntimeError as e:  # shapes differ: the spec no longer builds what was saved
+                part.load_state_dict(saved.get(name, {}))  # a part the run had not saved yet starts empty
+            except (RuntimeError, KeyError) as e:  # shapes differ, or it was never saved: the spec changed
                 raise CheckpointMismatch(f"{path / 'parts.pt'}: the saved {name} does not fit what the run's "
                                          f"spec builds now ({str(e).splitlines()[-1].strip()})") from e
     model.policy.load_state_dict(tensors["policy"])

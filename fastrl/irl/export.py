@@ -163,6 +163,25 @@ def reward_export(disc: Discriminator, gamma: float) -> tuple[dict, dict[str, to
     return meta, tensors
 
 
+def reward_snapshot(disc: Discriminator, venv: VecEnv | None) -> dict[str, torch.Tensor]:
+    """Shaped AIRL's r_psi and h as exported tensors, its absorbing reward, and the observation statistics now."""
+    _, tensors = export_parts({"r_psi": disc.r_psi, "h": disc.h})
+    tensors["r_absorbing"] = _tensor(disc.r_absorbing)
+    _, norm = obs_normalization(venv)
+    return tensors | norm
+
+
+def same_tensors(a: dict[str, torch.Tensor], b: dict[str, torch.Tensor]) -> bool:
+    """Whether two flat dicts hold equal tensors under the same names."""
+    return a.keys() == b.keys() and all(torch.equal(a[k], b[k]) for k in a)
+
+
+def average_export(snapshots: list[dict[str, torch.Tensor]]) -> tuple[dict, dict[str, torch.Tensor]]:
+    """Snapshots of r_psi and h (the last one the final networks) as the members of an averaged reward."""
+    tensors = {f"average.{k}.{name}": t for k, snap in enumerate(snapshots) for name, t in snap.items()}
+    return {"average": {"members": len(snapshots)}}, tensors
+
+
 def _atomic_write(path: Path, write) -> None:
     """write(tmp) then replace path, so readers never see a half-written file."""
     tmp = path.with_name(path.name + ".tmp")
@@ -180,14 +199,23 @@ def write_pair(out_dir: Path, name: str, meta: dict, tensors: dict[str, torch.Te
 
 
 def save_networks(out_dir: Path, model: BaseAlgorithm, venv: VecEnv | None, disc: Discriminator | None,
-                  gamma: float) -> list[Path]:
-    """Write policy, value and (with a discriminator) reward as .pt + .json pairs into out_dir; return the paths."""
+                  gamma: float, snapshots: list[dict[str, torch.Tensor]] | None = None) -> list[Path]:
+    """Write policy, value and (with a discriminator) reward as .pt + .json pairs into out_dir; return the paths.
+
+    With `snapshots` (shaped AIRL's r_psi and h during training), the reward also holds them and the final
+    networks as the members of their average."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     norm, norm_tensors = obs_normalization(venv)
     exports = {"policy": policy_export(model), "value": value_export(model)}
     if disc is not None:
-        exports["reward"] = reward_export(disc, gamma)
+        meta, tensors = reward_export(disc, gamma)
+        if snapshots is not None and disc.shaped:
+            final = reward_snapshot(disc, venv)
+            earlier = [snap for snap in snapshots if not same_tensors(snap, final)]  # taken at the very end
+            average_meta, average_tensors = average_export([*earlier, final])
+            meta, tensors = meta | average_meta, tensors | average_tensors
+        exports["reward"] = meta, tensors
     else:  # a stale reward from an earlier export would be loaded as this run's
         for stale in (out_dir / "reward.json", out_dir / "reward.pt"):
             stale.unlink(missing_ok=True)

@@ -153,10 +153,41 @@ def read_pair(directory: Path, name: str) -> Loaded:
         raise ValueError(f"{js}: malformed ({e})") from e
 
 
-class Networks:
-    """An exported run evaluated with plain torch: policy, value, and the learned reward (if saved)."""
+@dataclass(frozen=True)
+class RewardMember:
+    """One member of an averaged shaped-AIRL reward: r_psi, h, the absorbing reward and the normalisation they saw."""
 
-    def __init__(self, directory: Path):
+    r_psi: Mlp
+    h: Mlp
+    r_absorbing: float
+    norm: ObsNorm
+
+
+def reward_members(r: Loaded) -> list[RewardMember]:
+    """The members of an averaged reward ('average' in the JSON), each checked against the final parts' shapes."""
+    count = r.meta["average"]["members"]
+    if type(count) is not int or count < 1:
+        raise ValueError(f"{r.path}: average.members must be a positive integer, got {count!r}")
+    members = []
+    for k in range(count):
+        prefix = f"average.{k}."
+        own = {name[len(prefix):]: t for name, t in r.tensors.items() if name.startswith(prefix)}
+        try:
+            members.append(RewardMember(build_mlp("r_psi", r.meta["parts"]["r_psi"], own),
+                                        build_mlp("h", r.meta["parts"]["h"], own), float(own["r_absorbing"]),
+                                        build_norm(r.meta, own)))
+        except KeyError as e:
+            raise ValueError(f"{r.path}: tensor {prefix}{e.args[0]} missing from the averaged reward") from e
+    return members
+
+
+class Networks:
+    """An exported run evaluated with plain torch: policy, value, and the learned reward (if saved).
+
+    A shaped AIRL reward saved with snapshots from training is their average unless `averaged` is false (then the
+    final r_psi and h alone)."""
+
+    def __init__(self, directory: Path, averaged: bool = True):
         self.directory = Path(directory)
         self._policy = read_pair(self.directory, "policy")
         bounds = ("pi", "action.low", "action.high")
@@ -164,6 +195,7 @@ class Networks:
         self._value = read_pair(self.directory, "value")
         self.value_form = self._value.variant("form", {"state": ("v",), "q_of_policy": ("pi", "q1")})
         self._reward = self._read_reward()
+        self._members = self._read_members(averaged)
 
     def _read_reward(self) -> Loaded | None:
         """The reward pair, None if none was saved."""
@@ -180,6 +212,20 @@ class Networks:
             if cols is not None and not (isinstance(cols, list) and all(type(i) is int and i >= 0 for i in cols)):
                 raise ValueError(f"{loaded.path}: {key} must be a list of observation columns, got {cols!r}")
         return loaded
+
+    def _read_members(self, averaged: bool) -> list[RewardMember]:
+        """The averaged reward's members; one, the final networks, if not averaged or none were saved."""
+        r = self._reward
+        if r is None or r.meta["form"] != "state":
+            return []
+        if averaged and "average" in r.meta:
+            return reward_members(r)
+        return [RewardMember(r.parts["r_psi"], r.parts["h"], float(r.meta["absorbing_reward"]), r.norm)]
+
+    @property
+    def reward_members(self) -> int:
+        """How many r_psi (and h) the shaped reward averages: 1 for the final networks alone."""
+        return len(self._members)
 
     def policy(self, obs: np.ndarray) -> np.ndarray:
         """Deterministic actions for a batch of raw observations."""
@@ -230,10 +276,10 @@ class Networks:
         """The discount saved with the reward."""
         return float(self._reward_pair().meta["gamma"])
 
-    def _states(self, r: Loaded, obs: np.ndarray, key: str = "inputs") -> torch.Tensor:
-        """Normalised observations, the columns a network saw (`inputs`, or r_psi's `reward_inputs`; all if not
-        saved), with a zero absorbing flag."""
-        x = r.norm(obs)
+    def _states(self, r: Loaded, obs: np.ndarray, key: str = "inputs", norm: ObsNorm | None = None) -> torch.Tensor:
+        """Normalised observations (by `norm`, else the pair's), the columns a network saw (`inputs`, or r_psi's
+        `reward_inputs`; all if not saved), with a zero absorbing flag."""
+        x = (norm or r.norm)(obs)
         columns = r.meta.get(key, r.meta.get("inputs"))
         if columns is not None:
             x = x[:, columns]
@@ -244,7 +290,8 @@ class Networks:
         r = self._reward_pair()
         with torch.no_grad():
             if r.meta["form"] == "state":
-                return r.parts["r_psi"](self._states(r, obs[:-1], "reward_inputs")).squeeze(-1).numpy()
+                return torch.stack([m.r_psi(self._states(r, obs[:-1], "reward_inputs", m.norm)).squeeze(-1)
+                                    for m in self._members]).mean(0).numpy()
             s = self._states(r, obs)
             return r.parts["net"](torch.cat([s[:-1], s[1:]], dim=-1)).squeeze(-1).numpy()
 
@@ -254,10 +301,13 @@ class Networks:
         if r.meta["form"] != "state":
             raise ValueError(f"{self.directory / 'reward.json'}: only shaped AIRL has a shaping potential h")
         with torch.no_grad():
-            return r.parts["h"](self._states(r, obs)).squeeze(-1).numpy()
+            return torch.stack([m.h(self._states(r, obs, norm=m.norm)).squeeze(-1)
+                                for m in self._members]).mean(0).numpy()
 
     def absorbing_reward(self) -> float:
         """The learned reward of the absorbing state (a learned constant), in the same form as reward()."""
+        if self._members:
+            return float(np.mean([m.r_absorbing for m in self._members]))
         return float(self._reward_pair().meta["absorbing_reward"])
 
     def learned_return(self, obs: np.ndarray, terminated: bool, gamma: float | None = None) -> float:
@@ -271,6 +321,6 @@ class Networks:
         return ret
 
 
-def load_networks(directory: Path) -> Networks:
+def load_networks(directory: Path, averaged: bool = True) -> Networks:
     """The networks save_networks wrote into directory (json + torch.load(weights_only=True) only)."""
-    return Networks(Path(directory))
+    return Networks(Path(directory), averaged)

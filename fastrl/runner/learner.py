@@ -17,6 +17,7 @@ from ..data.replay import demonstration_pairs, expert_transitions
 from ..data.trajectory import Trajectory, load_trajectories
 from ..env.fast_env import FastEnv
 from ..irl import AdversarialCallback, Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
+from ..irl.averaging import RewardAveraging
 from ..irl.ranking import RankedRollouts
 from ..spec.models import TaskSpec
 from .demos import write_demos
@@ -32,11 +33,18 @@ class Learner:
     callbacks: list[BaseCallback] = field(default_factory=list)
     disc: Discriminator | None = None
     demos: list[Trajectory] = field(default_factory=list)
+    averaging: RewardAveraging | None = None
 
     @property
     def parts(self) -> dict:
-        """Extra trainable state saved in checkpoints (the discriminator and its optimizer)."""
-        return {"discriminator": self.callbacks[0].fit} if self.callbacks else {}
+        """Extra state saved in checkpoints: the discriminator and its optimizer, the reward's snapshots."""
+        parts = {"discriminator": self.callbacks[0].fit} if self.callbacks else {}
+        return parts | ({"reward_average": self.averaging} if self.averaging is not None else {})
+
+    @property
+    def snapshots(self) -> list | None:
+        """Shaped AIRL's r_psi and h copied during training, to save as an averaged reward; None: no averaging."""
+        return None if self.averaging is None else self.averaging.snapshots
 
     def stats(self) -> dict[str, float]:
         """The latest discriminator statistics, for the training curves."""
@@ -125,4 +133,5 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     else:
         cb = AdversarialCallback(disc, transitions, d.epochs, d.batch_size, d.learning_rate, spec.train.seed,
                                  d.entropy, d.history, d.scale_reward, d.gradient_penalty, ranked, d.ranking)
-    return Learner(spec, venv, model, [cb], disc, demos)
+    averaging = RewardAveraging(disc, d.average_every) if d.average_every and disc.shaped else None
+    return Learner(spec, venv, model, [cb, *([averaging] if averaging else [])], disc, demos, averaging)

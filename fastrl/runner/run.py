@@ -118,7 +118,7 @@ def _train_and_evaluate(run: Path, spec: TaskSpec, task: CompiledTask, ckpt: Pat
         state = {"episodes": monitor.episodes, "train_seconds": seconds, "stopped_early": monitor.stopped_early}
         save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state, learner.parts)
         save_checkpoint(run / "final", model, venv, state, learner.parts)
-        save_networks(run / "networks", model, venv, learner.disc, spec.train.params().gamma)
+        save_networks(run / "networks", model, venv, learner.disc, spec.train.params().gamma, learner.snapshots)
         update_meta(run, status="evaluating", trained_timesteps=int(model.num_timesteps), train_seconds=seconds,
                     train_fps=model.num_timesteps / max(seconds, 1e-9), stopped_early=monitor.stopped_early)
         try:

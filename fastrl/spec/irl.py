@@ -53,6 +53,9 @@ class DiscriminatorSettings(Strict):
         [0.0, 0.25, 0.5, 0.75, 1.0], min_length=2, description="random-action rates of the ranking rollouts")
     ranking_episodes: int = Field(4, ge=1, description="ranking rollouts per noise rate")
     ranking_repeat: int = Field(1, ge=1, description="steps each random action of the ranking rollouts is held")
+    average_every: int = Field(50000, ge=0, description="shaped AIRL: copy r_psi and h every this many environment "
+                               "steps; the saved reward is the mean of the copies and the final networks (adversarial "
+                               "training converges in the average of its iterates); 0: the final networks alone")
     shaped: bool = Field(True, description="AIRL: f = r_psi(s) + gamma h(s') - h(s); false: the standard f(s, s')")
     policy_term: bool | None = Field(None, description="AIRL: D's logit is f - log pi(a|s); false: f alone. Default "
                                      "(null): on for PPO, off for SAC, whose squashed Gaussian gives the expert's "
