@@ -251,7 +251,6 @@ def print_without_terms(results: list[dict]) -> None:
 
 def scatter_figure(shown: list[dict], out: Path) -> None:
     """Learned against heuristic return, one panel per run shown, coloured by the policy's training steps."""
-    several = len({r.get("setting") for r in shown}) > len({(r["task"], label(r)) for r in shown})
     import matplotlib
 
     matplotlib.use("Agg")
@@ -266,8 +265,8 @@ def scatter_figure(shown: list[dict], out: Path) -> None:
         steps = np.array([x["policy_steps"] for x in r["rows"]]) / 1000
         sc = ax.scatter([x["heuristic"] for x in r["rows"]], [x["learned"] for x in r["rows"]], c=steps, s=14,
                         cmap="viridis")
-        folder = f" ({Path(r['run']).parent.parent.name})" if several else ""
-        ax.set_title(f"{r['task']} {label(r)}{folder}\nseed {training_seed(r)}: rho {r['spearman']:.3f}", fontsize=9)
+        ax.set_title(f"{r['task']} {label(r)}\n{Path(r['run']).parent.parent.name}, seed {training_seed(r)}: "
+                     f"rho {r['spearman']:.3f}", fontsize=9)
         ax.set(xlabel="heuristic return", ylabel="learned return")
         fig.colorbar(sc, ax=ax, label="policy training steps (thousands)")
     fig.tight_layout()
