@@ -220,6 +220,10 @@ def test_an_averaged_reward_is_the_mean_of_its_members_each_under_its_own_normal
     (tmp_path / "reward.json").write_text(json.dumps(meta))
     with pytest.raises(ValueError, match="reward.json.*average.2"):
         load_networks(tmp_path)
+    meta["average"] = [2]  # malformed: named, not a crash
+    (tmp_path / "reward.json").write_text(json.dumps(meta))
+    with pytest.raises(ValueError, match="reward.json.*average.members"):
+        load_networks(tmp_path)
 
 
 def test_without_absorbing_states_termination_adds_nothing(ppo_run, tmp_path):

@@ -165,7 +165,8 @@ class RewardMember:
 
 def reward_members(r: Loaded) -> list[RewardMember]:
     """The members of an averaged reward ('average' in the JSON), each checked against the final parts' shapes."""
-    count = r.meta["average"]["members"]
+    average = r.meta["average"]
+    count = average.get("members") if isinstance(average, dict) else None
     if type(count) is not int or count < 1:
         raise ValueError(f"{r.path}: average.members must be a positive integer, got {count!r}")
     members = []
@@ -178,6 +179,8 @@ def reward_members(r: Loaded) -> list[RewardMember]:
                                         build_norm(r.meta, own)))
         except KeyError as e:
             raise ValueError(f"{r.path}: tensor {prefix}{e.args[0]} missing from the averaged reward") from e
+        except ValueError as e:
+            raise ValueError(f"{r.path}: member {k} of the averaged reward: {e}") from e
     return members
 
 
@@ -279,7 +282,7 @@ class Networks:
     def _states(self, r: Loaded, obs: np.ndarray, key: str = "inputs", norm: ObsNorm | None = None) -> torch.Tensor:
         """Normalised observations (by `norm`, else the pair's), the columns a network saw (`inputs`, or r_psi's
         `reward_inputs`; all if not saved), with a zero absorbing flag."""
-        x = (norm or r.norm)(obs)
+        x = (r.norm if norm is None else norm)(obs)
         columns = r.meta.get(key, r.meta.get("inputs"))
         if columns is not None:
             x = x[:, columns]
