@@ -12,7 +12,8 @@ final r_psi alone), GAIL log D - log(1 - D), discounted with the generator's gam
 the episode ended in success. Prints Spearman's rho over rollouts (and, for reference, with the undiscounted
 sum of learned rewards without the tail; undiscounted to the time limit, a finished episode's remaining steps
 at the absorbing state's reward, as the heuristic return is undiscounted; and over per-policy mean returns),
-then, where a task and algorithm have runs of several training seeds, rho's mean ± sd over them; then rho
+with a 95% interval from resampling the policies (1000 times, each policy with all its rollouts); then, where
+a task and algorithm have runs of several training seeds, rho's mean ± sd over them; then rho
 against the heuristic return less each of its weighted terms in turn, which shows the term the learned reward
 prices differently; writes the results as JSON and a scatter figure (the lowest seed of each task and algorithm).
 
@@ -110,7 +111,23 @@ def correlations(rows: list[dict], key=lambda r: r["policy_steps"]) -> dict:
     policies = list(dict.fromkeys(key(r) for r in rows))
     mean_of = lambda f: [np.mean([r[f] for r in rows if key(r) == p]) for p in policies]  # noqa: E731
     rho["spearman_policy_means"] = float(spearmanr(mean_of("heuristic"), mean_of("learned")).statistic)
-    return {"policies": len(policies), "rollouts": len(rows), **rho, "spearman_without": without_terms(rows)}
+    return {"policies": len(policies), "rollouts": len(rows), **rho, "spearman_ci": policy_bootstrap(rows, key),
+            "spearman_without": without_terms(rows)}
+
+
+def policy_bootstrap(rows: list[dict], key, resamples: int = 1000, seed: int = 0) -> list[float]:
+    """95% interval of rho when the policies are resampled with replacement (each with all its rollouts)."""
+    groups: dict[object, list[int]] = {}
+    for i, r in enumerate(rows):
+        groups.setdefault(key(r), []).append(i)
+    members = list(groups.values())
+    h, learned = np.array([r["heuristic"] for r in rows]), np.array([r["learned"] for r in rows])
+    rng = np.random.default_rng(seed)
+    rhos = []
+    for _ in range(resamples):
+        idx = np.concatenate([members[k] for k in rng.integers(0, len(members), len(members))])
+        rhos.append(spearmanr(h[idx], learned[idx]).statistic)
+    return [float(v) for v in np.nanpercentile(rhos, [2.5, 97.5])]
 
 
 def without_terms(rows: list[dict]) -> dict[str, float]:
@@ -208,13 +225,15 @@ def label(result: dict) -> str:
 def print_tables(results: list[dict]) -> None:
     """One row per run; then, where a task and algorithm have several runs (seeds), mean ± sd over them."""
     print("| task | algorithm | runs of | seed | policies x episodes | Spearman rho (learned return vs heuristic) | "
-          "rho, undiscounted sum without tail | rho, undiscounted to the time limit | rho of per-policy means |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "95% interval, policies resampled | rho, undiscounted sum without tail | rho, undiscounted to the time "
+          "limit | rho of per-policy means |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in results:
         horizon = f"{r['spearman_horizon']:.3f}" if "spearman_horizon" in r else "-"  # not in older results
+        ci = "{:.2f} to {:.2f}".format(*r["spearman_ci"]) if "spearman_ci" in r else "-"
         folder = Path(r["run"]).parent.parent.name
         print(f"| {r['task']} | {label(r)} | {folder} | {training_seed(r)} | {r['policies']} x "
-              f"{r['rollouts'] // r['policies']} | {r['spearman']:.3f} | {r['spearman_sum']:.3f} | {horizon} | "
+              f"{r['rollouts'] // r['policies']} | {r['spearman']:.3f} | {ci} | {r['spearman_sum']:.3f} | {horizon} | "
               f"{r['spearman_policy_means']:.3f} |")
     groups: dict[tuple, list[dict]] = {}
     for r in results:
