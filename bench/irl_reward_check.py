@@ -132,8 +132,6 @@ def policy_bootstrap(rows: list[dict], key, resamples: int = 1000, seed: int = 0
 
 def without_terms(rows: list[dict]) -> dict[str, float]:
     """rho of the learned return against the heuristic return less one weighted term, for each term that varies."""
-    if not rows or "terms" not in rows[0]:
-        return {}
     learned = [r["learned"] for r in rows]
     return {name: float(spearmanr([r["heuristic"] - r["terms"][name] for r in rows], learned).statistic)
             for name in rows[0]["terms"] if np.ptp([r["terms"][name] for r in rows]) > 0}
