@@ -15,7 +15,9 @@ at the absorbing state's reward, as the heuristic return is undiscounted; and ov
 with a 95% interval from resampling the policies (1000 times, each policy with all its rollouts); then, where
 a task and algorithm have runs of several training seeds, rho's mean ± sd over them; then rho
 against the heuristic return less each of its weighted terms in turn, which shows the term the learned reward
-prices differently; writes the results as JSON and a scatter figure (the lowest seed of each task and algorithm).
+prices differently; then rho as the terms the run's demonstrations never exercise (zero at every step, such
+as contact: the expert shows no price for them) are priced at 0 to 1 times their weight; writes the results
+as JSON and a scatter figure (the lowest seed of each task and algorithm).
 
 With --pool, each reward is scored instead on the checkpoints of the pool's runs of its task (PPO on the
 heuristic, BC, GAIL, AIRL, any seed) but its own, plus one untrained policy per training seed: policies its
@@ -37,6 +39,8 @@ from pathlib import Path
 
 import numpy as np
 from scipy.stats import spearmanr
+
+SILENT_SCALES = (0.0, 0.05, 0.1, 0.25, 0.5, 1.0)  # weights of the terms the demonstrations never exercise, x spec's
 
 
 def rollout(env, policy, seed: int) -> tuple[np.ndarray, float, bool, dict[str, float]]:
@@ -102,7 +106,7 @@ def scored(rows: list[dict], nets, max_steps: int) -> list[dict]:
     return out
 
 
-def correlations(rows: list[dict], key=lambda r: r["policy_steps"]) -> dict:
+def correlations(rows: list[dict], silent: list[str], key=lambda r: r["policy_steps"]) -> dict:
     """Spearman's rho of heuristic against each learned return over rollouts, and over per-policy means."""
     h = [r["heuristic"] for r in rows]
     rho = {name: float(spearmanr(h, [r[field] for r in rows]).statistic)
@@ -112,7 +116,8 @@ def correlations(rows: list[dict], key=lambda r: r["policy_steps"]) -> dict:
     mean_of = lambda f: [np.mean([r[f] for r in rows if key(r) == p]) for p in policies]  # noqa: E731
     rho["spearman_policy_means"] = float(spearmanr(mean_of("heuristic"), mean_of("learned")).statistic)
     return {"policies": len(policies), "rollouts": len(rows), **rho, "spearman_ci": policy_bootstrap(rows, key),
-            "spearman_without": without_terms(rows)}
+            "spearman_without": without_terms(rows), "silent_terms": silent,
+            "spearman_silent_scaled": silent_scaled(rows, silent)}
 
 
 def policy_bootstrap(rows: list[dict], key, resamples: int = 1000, seed: int = 0) -> list[float]:
@@ -137,6 +142,30 @@ def without_terms(rows: list[dict]) -> dict[str, float]:
             for name in rows[0]["terms"] if np.ptp([r["terms"][name] for r in rows]) > 0}
 
 
+def silent_terms(env, run: Path) -> list[str]:
+    """Weighted terms that are zero at every step of the run's demonstrations: the expert never shows their price."""
+    from fastrl.data.replay import replay
+    from fastrl.data.trajectory import load_trajectories
+
+    demos, errors = load_trajectories([run / "demos"]) if (run / "demos").is_dir() else ([], [])
+    for err in errors:  # a damaged file is reported; the others still count
+        print(f"skipping a demonstration of {run}: {err}")
+    if not demos:
+        return []
+    used = {name for traj in demos for info in replay(env, traj)[1] for name, v in info["features"].items() if v}
+    return [name for name, w in zip(env.feature_names, env.weights) if w and name not in used]
+
+
+def silent_scaled(rows: list[dict], silent: list[str]) -> dict[str, float]:
+    """rho of the learned return against the heuristic return with the silent terms' weights scaled by each of
+    SILENT_SCALES (1: the spec's heuristic; the demonstrations' returns are the same at every scale)."""
+    if not silent:
+        return {}
+    learned = [r["learned"] for r in rows]
+    return {f"{k:g}": float(spearmanr([r["heuristic"] - (1.0 - k) * sum(r["terms"][n] for n in silent) for r in rows],
+                                      learned).statistic) for k in SILENT_SCALES}
+
+
 def setting(spec) -> str:
     """What a run was trained with but its seed, as a hash: runs of one setting differ only in the seed."""
     from fastrl.spec import spec_hash
@@ -155,7 +184,7 @@ def check(run: Path, episodes: int, averaged: bool = True) -> dict:
     env = FastEnv(spec)
     rows = scored(rollouts(env, run_policies(run), episodes), nets, env.max_steps)
     return {"run": str(run), "task": spec.name, "algorithm": nets.kind, "setting": setting(spec),
-            "reward_members": nets.reward_members, **correlations(rows), "rows": rows}
+            "reward_members": nets.reward_members, **correlations(rows, silent_terms(env, run)), "rows": rows}
 
 
 def check_pool(reward_runs: list[Path], pool: list[Path], episodes: int, averaged: bool = True) -> list[dict]:
@@ -203,7 +232,8 @@ def check_pool(reward_runs: list[Path], pool: list[Path], episodes: int, average
             rows_scored = scored(held_out, nets[run], env.max_steps)
             results.append({"run": str(run), "task": task, "algorithm": nets[run].kind, "setting": setting(specs[run]),
                             "pool": True, "reward_members": nets[run].reward_members,
-                            **correlations(rows_scored, key=lambda r: (r["policy_run"], r["policy_steps"])),
+                            **correlations(rows_scored, silent_terms(env, run),
+                                           key=lambda r: (r["policy_run"], r["policy_steps"])),
                             "rows": rows_scored})
     return results
 
@@ -266,6 +296,22 @@ def print_without_terms(results: list[dict]) -> None:
                   f"{cells} |")
 
 
+def print_silent_scaled(results: list[dict]) -> None:
+    """Per run: rho as the terms its demonstrations never exercise are priced at fractions of the spec's weight."""
+    results = [r for r in results if r.get("spearman_silent_scaled")]
+    for task in dict.fromkeys(r["task"] for r in results):
+        rows = [r for r in results if r["task"] == task]
+        scales = list(rows[0]["spearman_silent_scaled"])
+        print(f"\n{task}: rho with the terms the demonstrations never exercise priced at k x the spec's weight "
+              "(the demonstrations' returns are the same for every k)\n")
+        print("| algorithm | run | seed | terms | " + " | ".join(f"k = {k}" for k in scales) + " |")
+        print("|---|---|---|---|" + "---|" * len(scales))
+        for r in rows:
+            cells = " | ".join(f"{r['spearman_silent_scaled'][k]:.3f}" for k in scales)
+            print(f"| {label(r)} | {Path(r['run']).parent.parent.name} | {training_seed(r)} | "
+                  f"{', '.join(r['silent_terms'])} | {cells} |")
+
+
 def scatter_figure(shown: list[dict], out: Path) -> None:
     """Learned against heuristic return, one panel per run shown, coloured by the policy's training steps."""
     import matplotlib
@@ -288,6 +334,36 @@ def scatter_figure(shown: list[dict], out: Path) -> None:
         fig.colorbar(sc, ax=ax, label="policy training steps (thousands)")
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+
+
+def silent_figure(results: list[dict], out: Path) -> None:
+    """rho against the price of the terms the demonstrations never exercise: a panel per task, a line per run."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    results = [r for r in results if r.get("spearman_silent_scaled")]
+    tasks = list(dict.fromkeys(r["task"] for r in results))
+    labels = list(dict.fromkeys(label(r) for r in results))
+    colours = dict(zip(labels, plt.rcParams["axes.prop_cycle"].by_key()["color"] * 3))
+    fig, axes = plt.subplots(1, len(tasks), figsize=(5.2 * len(tasks), 4.2), squeeze=False)
+    for ax, task in zip(axes[0], tasks):
+        shown = set()
+        for r in (r for r in results if r["task"] == task):
+            name = label(r)
+            scan = r["spearman_silent_scaled"]
+            ax.plot([float(k) for k in scan], list(scan.values()), "o-", ms=3, color=colours[name],
+                    label=None if name in shown else name)
+            shown.add(name)
+        ax.axhline(0.8, color="grey", ls="--", lw=1)
+        silent = next(r["silent_terms"] for r in results if r["task"] == task)
+        ax.set(title=f"{task}: never shown {', '.join(silent)}",
+               xlabel="their price, times the spec's weight",
+               ylabel="Spearman rho")
+        ax.legend(fontsize=7)
+    fig.tight_layout()
     fig.savefig(out, dpi=110)
 
 
@@ -319,10 +395,15 @@ def main() -> None:
     results.sort(key=lambda r: (r["task"], label(r), r.get("setting", ""), training_seed(r) or 0))
     print_tables(results)
     print_without_terms(results)
+    print_silent_scaled(results)
     shown = list({(r["task"], label(r), r.get("setting")): r
                   for r in reversed(results) if "rows" in r}.values())[::-1]  # the lowest seed of each setting
     if shown:
         scatter_figure(shown, Path(args.figure))
+    silent_out = Path(args.figure).with_name(Path(args.figure).stem + "_silent_terms.png")
+    if any(r.get("spearman_silent_scaled") for r in results):
+        silent_figure(results, silent_out)
+        print(f"figure: {silent_out}")
     if args.no_rows:
         results = [{k: v for k, v in r.items() if k != "rows"} for r in results]
     out = Path(args.figure)
