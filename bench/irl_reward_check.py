@@ -6,18 +6,20 @@
 
 For each run (GAIL or AIRL, with networks/ and checkpoints/): the untrained policy (same seed) and every saved
 checkpoint are rolled out deterministically on held-out seeds (20000, 20001, ...). Each rollout is scored by the
-spec's heuristic return (sum of w . phi) and by the learned reward saved in networks/reward.pt, loaded without
-pickle: AIRL r_psi(s) (averaged over the copies saved during training, if the run saved them; --final: the
-final r_psi alone), GAIL log D - log(1 - D), discounted with the generator's gamma plus the absorbing tail if
-the episode ended in success. Prints Spearman's rho over rollouts (and, for reference, with the undiscounted
-sum of learned rewards without the tail; undiscounted to the time limit, a finished episode's remaining steps
-at the absorbing state's reward, as the heuristic return is undiscounted; and over per-policy mean returns),
-with a 95% interval from resampling the policies (1000 times, each policy with all its rollouts); then, where
-a task and algorithm have runs of several training seeds, rho's mean ± sd over them; then rho
-against the heuristic return less each of its weighted terms in turn, which shows the term the learned reward
-prices differently; then rho as the terms the run's demonstrations never exercise (zero at every step, such
-as contact: the expert shows no price for them) are priced at 0 to 1 times their weight; writes the results
-as JSON and a scatter figure (the lowest seed of each task and algorithm).
+spec's heuristic reward (w . phi) and by the learned reward saved in networks/reward.pt, loaded without pickle:
+AIRL r_psi(s) (averaged over the copies saved during training, if the run saved them; --final: the final r_psi
+alone), GAIL log D - log(1 - D). Prints Spearman's rho over rollouts between the two returns read three ways:
+both discounted with the generator's gamma (the learned one with the absorbing tail if the episode ended in
+success), both summed undiscounted over the episode, and the learned return discounted against the heuristic
+one summed (also, for reference, the learned sum continued to the time limit at the absorbing state's reward,
+and rho over per-policy mean returns), each with a 95% interval from resampling the policies (1000 times, each
+policy with all its rollouts), and the same readings for a reward of -1 per step, which knows only how long an
+episode ran; then, where a task and algorithm have runs of several training seeds, each reading per seed; then,
+by the third reading, rho against the heuristic return less each of its weighted terms in turn, which shows the
+term the learned reward prices differently, and rho as the terms the run's demonstrations never exercise (zero
+at every step, such as contact: the expert shows no price for them) are priced at 0 to 1 times their weight;
+writes the results as JSON and figures (learned against heuristic return for the lowest seed of each task and
+algorithm; rho against the price of the never-exercised terms).
 
 With --pool, each reward is scored instead on the checkpoints of the pool's runs of its task (PPO on the
 heuristic, BC, GAIL, AIRL, any seed) but its own, plus one untrained policy per training seed: policies its
@@ -40,23 +42,34 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
+READINGS = {  # rho's name: (heuristic, learned) fields of a row
+    "spearman_discounted": ("heuristic_discounted", "learned"),  # both discounted with the generator's gamma
+    "spearman_sum": ("heuristic", "learned_sum"),  # both summed undiscounted over the episode
+    "spearman": ("heuristic", "learned"),  # the learned return discounted, the heuristic one summed
+    "spearman_horizon": ("heuristic", "learned_horizon"),  # the learned sum continued to the time limit
+}
+LENGTH_READINGS = {  # the same readings of a reward of -1 per step until the episode ends: how far length alone gets
+    "spearman": ("heuristic", "length_discounted"),
+    "spearman_sum": ("heuristic", "length_sum"),
+    "spearman_discounted": ("heuristic_discounted", "length_discounted"),
+}
 SILENT_SCALES = (0.0, 0.05, 0.1, 0.25, 0.5, 1.0)  # weights of the terms the demonstrations never exercise, x spec's
 
 
-def rollout(env, policy, seed: int) -> tuple[np.ndarray, float, bool, dict[str, float]]:
-    """Observations, heuristic return, success and each weighted term's share of the return, of one episode."""
+def rollout(env, policy, seed: int) -> tuple[np.ndarray, np.ndarray, bool, dict[str, float]]:
+    """Observations, heuristic rewards, success and each weighted term's share of the return, of one episode."""
     obs, _ = env.reset(seed=seed)
-    observations, total, done, info = [obs], 0.0, False, {}
+    observations, rewards, done, info = [obs], [], False, {}
     weights = dict(zip(env.feature_names, env.weights))
     terms = dict.fromkeys(weights, 0.0)
     while not done:
         obs, reward, term, trunc, info = env.step(policy(obs))
         observations.append(obs)
-        total += reward
+        rewards.append(reward)
         for name, value in info["features"].items():
             terms[name] += weights[name] * value
         done = term or trunc
-    return np.array(observations), total, bool(info.get("success", False)), terms
+    return np.array(observations), np.array(rewards), bool(info.get("success", False)), terms
 
 
 def untrained_policy(spec):
@@ -87,51 +100,58 @@ def rollouts(env, policies: dict[int, object], episodes: int) -> list[dict]:
     rows = []
     for steps, policy in policies.items():
         for seed in range(20000, 20000 + episodes):
-            obs, heuristic, success, terms = rollout(env, policy, seed)
-            rows.append({"policy_steps": steps, "seed": seed, "heuristic": heuristic, "terms": terms,
-                         "success": success, "steps": len(obs) - 1, "obs": obs})
+            obs, rewards, success, terms = rollout(env, policy, seed)
+            rows.append({"policy_steps": steps, "seed": seed, "heuristic": float(sum(rewards.tolist())),
+                         "terms": terms, "success": success, "steps": len(obs) - 1, "obs": obs, "rewards": rewards})
     return rows
 
 
 def scored(rows: list[dict], nets, max_steps: int) -> list[dict]:
-    """The rows with their learned returns (discounted with tail, undiscounted, undiscounted to the limit)."""
+    """The rows with their learned returns (discounted with tail, undiscounted, undiscounted to the limit) and
+    the heuristic return discounted with the same gamma."""
     out = []
     for r in rows:
         obs, success = r["obs"], r["success"]
         learned_sum = float(nets.reward(obs).sum())
         tail = (max_steps - (len(obs) - 1)) * nets.absorbing_reward() if success else 0.0
-        out.append({k: v for k, v in r.items() if k != "obs"}
+        discount = nets.gamma ** np.arange(len(r["rewards"]))
+        out.append({k: v for k, v in r.items() if k not in ("obs", "rewards")}
                    | {"learned": nets.learned_return(obs, success), "learned_sum": learned_sum,
-                      "learned_horizon": learned_sum + tail})
+                      "learned_horizon": learned_sum + tail,
+                      "heuristic_discounted": float(np.sum(discount * r["rewards"])),
+                      "length_sum": -float(len(discount)), "length_discounted": -float(discount.sum())})
     return out
 
 
 def correlations(rows: list[dict], silent: list[str], key=lambda r: r["policy_steps"]) -> dict:
     """Spearman's rho of heuristic against each learned return over rollouts, and over per-policy means."""
-    h = [r["heuristic"] for r in rows]
-    rho = {name: float(spearmanr(h, [r[field] for r in rows]).statistic)
-           for name, field in (("spearman", "learned"), ("spearman_sum", "learned_sum"),
-                               ("spearman_horizon", "learned_horizon"))}
+    rho = {name: float(spearmanr([r[heuristic] for r in rows], [r[learned] for r in rows]).statistic)
+           for name, (heuristic, learned) in READINGS.items()}
     policies = list(dict.fromkeys(key(r) for r in rows))
     mean_of = lambda f: [np.mean([r[f] for r in rows if key(r) == p]) for p in policies]  # noqa: E731
     rho["spearman_policy_means"] = float(spearmanr(mean_of("heuristic"), mean_of("learned")).statistic)
-    return {"policies": len(policies), "rollouts": len(rows), **rho, "spearman_ci": policy_bootstrap(rows, key),
+    intervals = {f"{name}_ci": policy_bootstrap(rows, key, *fields) for name, fields in READINGS.items()
+                 if name != "spearman_horizon"}
+    length = {name: float(spearmanr([r[heuristic] for r in rows], [r[steps] for r in rows]).statistic)
+              for name, (heuristic, steps) in LENGTH_READINGS.items()}
+    return {"policies": len(policies), "rollouts": len(rows), **rho, **intervals, "length_baseline": length,
             "spearman_without": without_terms(rows), "silent_terms": silent,
             "spearman_silent_scaled": silent_scaled(rows, silent)}
 
 
-def policy_bootstrap(rows: list[dict], key, resamples: int = 1000, seed: int = 0) -> list[float]:
+def policy_bootstrap(rows: list[dict], key, heuristic: str = "heuristic", learned: str = "learned",
+                     resamples: int = 1000, seed: int = 0) -> list[float]:
     """95% interval of rho when the policies are resampled with replacement (each with all its rollouts)."""
     groups: dict[object, list[int]] = {}
     for i, r in enumerate(rows):
         groups.setdefault(key(r), []).append(i)
     members = list(groups.values())
-    h, learned = np.array([r["heuristic"] for r in rows]), np.array([r["learned"] for r in rows])
+    h, g = np.array([r[heuristic] for r in rows]), np.array([r[learned] for r in rows])
     rng = np.random.default_rng(seed)
     rhos = []
     for _ in range(resamples):
         idx = np.concatenate([members[k] for k in rng.integers(0, len(members), len(members))])
-        rhos.append(spearmanr(h[idx], learned[idx]).statistic)
+        rhos.append(spearmanr(h[idx], g[idx]).statistic)
     return [float(v) for v in np.nanpercentile(rhos, [2.5, 97.5])]
 
 
@@ -185,6 +205,17 @@ def check(run: Path, episodes: int, averaged: bool = True) -> dict:
     rows = scored(rollouts(env, run_policies(run), episodes), nets, env.max_steps)
     return {"run": str(run), "task": spec.name, "algorithm": nets.kind, "setting": setting(spec),
             "reward_members": nets.reward_members, **correlations(rows, silent_terms(env, run)), "rows": rows}
+
+
+def checked(run: Path, episodes: int, averaged: bool) -> dict | None:
+    """check(run), or None after saying why when the run has no readable spec or learned reward."""
+    from fastrl.spec import SpecError
+
+    try:
+        return check(run, episodes, averaged)
+    except (SpecError, OSError, ValueError, KeyError) as err:  # report it, check the rest
+        print(f"skipping {run}: {err}")
+        return None
 
 
 def check_pool(reward_runs: list[Path], pool: list[Path], episodes: int, averaged: bool = True) -> list[dict]:
@@ -250,34 +281,46 @@ def label(result: dict) -> str:
     return result["algorithm"].upper() + averaged + (" on the pool" if result.get("pool") else "")
 
 
+def reading(r: dict, name: str, interval: bool = True) -> str:
+    """One reading's rho, with its 95% interval if asked and recorded ('-' where older results lack it)."""
+    if name not in r:
+        return "-"
+    ci = r.get(f"{name}_ci")
+    return f"{r[name]:.3f}" + (" ({:.2f} to {:.2f})".format(*ci) if interval and ci else "")
+
+
 def print_tables(results: list[dict]) -> None:
-    """One row per run; then, where a task and algorithm have several runs (seeds), mean ± sd over them."""
-    print("| task | algorithm | runs of | seed | policies x episodes | Spearman rho (learned return vs heuristic) | "
-          "95% interval, policies resampled | rho, undiscounted sum without tail | rho, undiscounted to the time "
-          "limit | rho of per-policy means |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    """One row per run; then, where a task and algorithm have several runs (seeds), each reading per seed."""
+    print("| task | algorithm | runs of | seed | policies x episodes | rho: both returns discounted with the "
+          "generator's gamma (95% interval, policies resampled) | rho: both summed | rho: learned discounted, "
+          "heuristic summed | rho: learned summed to the time limit | rho of per-policy means | rho of -1 per step, "
+          "by the same three readings |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for r in results:
-        horizon = f"{r['spearman_horizon']:.3f}" if "spearman_horizon" in r else "-"  # not in older results
-        ci = "{:.2f} to {:.2f}".format(*r["spearman_ci"]) if "spearman_ci" in r else "-"
         folder = Path(r["run"]).parent.parent.name
+        length = r.get("length_baseline", {})
+        baseline = ", ".join(f"{length[k]:.2f}" for k in ("spearman_discounted", "spearman_sum", "spearman")
+                             if k in length) or "-"
         print(f"| {r['task']} | {label(r)} | {folder} | {training_seed(r)} | {r['policies']} x "
-              f"{r['rollouts'] // r['policies']} | {r['spearman']:.3f} | {ci} | {r['spearman_sum']:.3f} | {horizon} | "
-              f"{r['spearman_policy_means']:.3f} |")
+              f"{r['rollouts'] // r['policies']} | {reading(r, 'spearman_discounted')} | {reading(r, 'spearman_sum')} "
+              f"| {reading(r, 'spearman')} | {reading(r, 'spearman_horizon')} | {r['spearman_policy_means']:.3f} | "
+              f"{baseline} |")
     groups: dict[tuple, list[dict]] = {}
     for r in results:
         groups.setdefault((r["task"], label(r), r.get("setting")), []).append(r)
     if all(len(g) == 1 for g in groups.values()):
         return
-    print("\n| task | algorithm | runs of (first run's folder) | seeds | rho, mean ± sd | per seed | runs at >= 0.8 | "
-          "rho to the time limit, per seed |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("\n| task | algorithm | runs of (first run's folder) | seeds | both discounted, per seed | at >= 0.8 | "
+          "both summed, per seed | at >= 0.8 | learned discounted, heuristic summed, per seed | at >= 0.8 |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for (task, algo, _), g in groups.items():
-        rhos = np.array([r["spearman"] for r in g])
-        per_seed = ", ".join(f"{r['spearman']:.2f}" for r in g)
-        horizon = ", ".join(f"{r['spearman_horizon']:.2f}" if "spearman_horizon" in r else "-" for r in g)
+        cells = []
+        for name in ("spearman_discounted", "spearman_sum", "spearman"):
+            values = [r.get(name) for r in g]
+            passed = f"{sum(v >= 0.8 for v in values)} of {len(g)}" if None not in values else "-"
+            cells += [", ".join(f"{v:.2f}" if v is not None else "-" for v in values), passed]
         folder = Path(g[0]["run"]).parent.parent.name
-        print(f"| {task} | {algo} | {folder} | {len(g)} | {rhos.mean():.2f} ± {rhos.std():.2f} | {per_seed} | "
-              f"{int((rhos >= 0.8).sum())} of {len(g)} | {horizon} |")
+        print(f"| {task} | {algo} | {folder} | {len(g)} | " + " | ".join(cells) + " |")
 
 
 def print_without_terms(results: list[dict]) -> None:
@@ -313,7 +356,8 @@ def print_silent_scaled(results: list[dict]) -> None:
 
 
 def scatter_figure(shown: list[dict], out: Path) -> None:
-    """Learned against heuristic return, one panel per run shown, coloured by the policy's training steps."""
+    """Learned against heuristic return (both discounted, where recorded), one panel per run shown, coloured by the
+    policy's training steps."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -326,11 +370,16 @@ def scatter_figure(shown: list[dict], out: Path) -> None:
         ax.set_visible(False)
     for ax, r in zip(axes.flat, shown):
         steps = np.array([x["policy_steps"] for x in r["rows"]]) / 1000
-        sc = ax.scatter([x["heuristic"] for x in r["rows"]], [x["learned"] for x in r["rows"]], c=steps, s=14,
+        discounted = "spearman_discounted" in r
+        heuristic = "heuristic_discounted" if discounted else "heuristic"
+        sc = ax.scatter([x[heuristic] for x in r["rows"]], [x["learned"] for x in r["rows"]], c=steps, s=14,
                         cmap="viridis")
+        rho = (f"rho {r['spearman_discounted']:.3f} (heuristic summed: {r['spearman']:.3f})" if discounted
+               else f"rho {r['spearman']:.3f}")
         ax.set_title(f"{r['task']} {label(r)}\n{Path(r['run']).parent.parent.name}, seed {training_seed(r)}: "
-                     f"rho {r['spearman']:.3f}", fontsize=9)
-        ax.set(xlabel="heuristic return", ylabel="learned return")
+                     f"{rho}", fontsize=9)
+        ax.set(xlabel="heuristic return" + (", discounted" if discounted else ""),
+               ylabel="learned return, discounted")
         fig.colorbar(sc, ax=ax, label="policy training steps (thousands)")
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -391,7 +440,9 @@ def main() -> None:
     if args.pool is not None:
         results += check_pool(args.runs, args.pool or args.runs, args.episodes, not args.final)
     else:
-        results += [check(run, args.episodes, not args.final) for run in args.runs]
+        results += [r for run in args.runs if (r := checked(run, args.episodes, not args.final))]
+    if not results:
+        raise SystemExit("no run could be checked")
     results.sort(key=lambda r: (r["task"], label(r), r.get("setting", ""), training_seed(r) or 0))
     print_tables(results)
     print_without_terms(results)
