@@ -330,7 +330,7 @@ def print_without_terms(results: list[dict]) -> None:
     for task in dict.fromkeys(r["task"] for r in results):
         rows = [r for r in results if r["task"] == task]
         terms = list(dict.fromkeys(t for r in rows for t in r["spearman_without"]))
-        print(f"\n{task}: rho against the heuristic return less one term\n")
+        print(f"\n{task}: rho (learned discounted, heuristic summed) against the heuristic return less one term\n")
         print("| algorithm | run | seed | rho | " + " | ".join(f"less {t}" for t in terms) + " |")
         print("|---|---|---|---|" + "---|" * len(terms))
         for r in rows:
@@ -345,8 +345,8 @@ def print_silent_scaled(results: list[dict]) -> None:
     for task in dict.fromkeys(r["task"] for r in results):
         rows = [r for r in results if r["task"] == task]
         scales = list(rows[0]["spearman_silent_scaled"])
-        print(f"\n{task}: rho with the terms the demonstrations never exercise priced at k x the spec's weight "
-              "(the demonstrations' returns are the same for every k)\n")
+        print(f"\n{task}: rho (learned discounted, heuristic summed) with the terms the demonstrations never "
+              "exercise priced at k x the spec's weight (the demonstrations' returns are the same for every k)\n")
         print("| algorithm | run | seed | terms | " + " | ".join(f"k = {k}" for k in scales) + " |")
         print("|---|---|---|---|" + "---|" * len(scales))
         for r in rows:
