@@ -48,11 +48,6 @@ READINGS = {  # rho's name: (heuristic, learned) fields of a row
     "spearman": ("heuristic", "learned"),  # the learned return discounted, the heuristic one summed
     "spearman_horizon": ("heuristic", "learned_horizon"),  # the learned sum continued to the time limit
 }
-LENGTH_READINGS = {  # the same readings of a reward of -1 per step until the episode ends: how far length alone gets
-    "spearman": ("heuristic", "length_discounted"),
-    "spearman_sum": ("heuristic", "length_sum"),
-    "spearman_discounted": ("heuristic_discounted", "length_discounted"),
-}
 SILENT_SCALES = (0.0, 0.05, 0.1, 0.25, 0.5, 1.0)  # weights of the terms the demonstrations never exercise, x spec's
 
 
@@ -118,8 +113,7 @@ def scored(rows: list[dict], nets, max_steps: int) -> list[dict]:
         out.append({k: v for k, v in r.items() if k not in ("obs", "rewards")}
                    | {"learned": nets.learned_return(obs, success), "learned_sum": learned_sum,
                       "learned_horizon": learned_sum + tail,
-                      "heuristic_discounted": float(np.sum(discount * r["rewards"])),
-                      "length_sum": -float(len(discount)), "length_discounted": -float(discount.sum())})
+                      "heuristic_discounted": float(np.sum(discount * r["rewards"]))})
     return out
 
 
@@ -132,8 +126,9 @@ def correlations(rows: list[dict], silent: list[str], key=lambda r: r["policy_st
     rho["spearman_policy_means"] = float(spearmanr(mean_of("heuristic"), mean_of("learned")).statistic)
     intervals = {f"{name}_ci": policy_bootstrap(rows, key, *fields) for name, fields in READINGS.items()
                  if name != "spearman_horizon"}
-    length = {name: float(spearmanr([r[heuristic] for r in rows], [r[steps] for r in rows]).statistic)
-              for name, (heuristic, steps) in LENGTH_READINGS.items()}
+    steps = [-r["steps"] for r in rows]  # a reward of -1 per step ranks rollouts by length, discounted or not
+    length = {name: float(spearmanr([r[heuristic] for r in rows], steps).statistic)
+              for name, (heuristic, _) in READINGS.items() if name != "spearman_horizon"}
     return {"policies": len(policies), "rollouts": len(rows), **rho, **intervals, "length_baseline": length,
             "spearman_without": without_terms(rows), "silent_terms": silent,
             "spearman_silent_scaled": silent_scaled(rows, silent)}
