@@ -64,8 +64,9 @@ def score_task(task: str, levels: int, per_level: int, root: Path, seed: int = 0
         if run is None:
             print(f"{task}: no {algorithm} run under {root}/{task}: skipped")
             continue
-        result = assess([cohort], run=run, output=ROOT / root.name / task / f"{algorithm}-s{seed}" / "scores.json",
-                        progress=False)
+        result = assess(
+            [cohort], run=run, output=ROOT / root.name / task / f"{algorithm}-s{seed}" / "scores.json", progress=False
+        )
         out[algorithm] = {"run": str(run), "report": result.report, "seconds": result.seconds}
     return out
 
@@ -74,10 +75,16 @@ def table(task: str, reports: dict) -> None:
     """Table 1-style markdown: mean ± sd per level, then tau-b per score."""
     airl, gail = reports.get("airl", {}).get("report"), reports.get("gail", {}).get("report")
     base = airl or gail
-    cols = [("heuristic", base, "heuristic"), ("r_psi (AIRL)", airl, "reward"), ("V_phi (AIRL)", airl, "value"),
-            ("h (AIRL)", airl, "potential"),
-            ("r (GAIL)", gail, "reward"), ("V (GAIL)", gail, "value"), ("path length (m)", base, "path_length"),
-            ("time (s)", base, "time")]
+    cols = [
+        ("heuristic", base, "heuristic"),
+        ("r_psi (AIRL)", airl, "reward"),
+        ("V_phi (AIRL)", airl, "value"),
+        ("h (AIRL)", airl, "potential"),
+        ("r (GAIL)", gail, "reward"),
+        ("V (GAIL)", gail, "value"),
+        ("path length (m)", base, "path_length"),
+        ("time (s)", base, "time"),
+    ]
     cols = [c for c in cols if c[1] is not None]
     print(f"\n### {task}\n")
     print("| level | " + " | ".join(c[0] for c in cols) + " |")
@@ -91,24 +98,39 @@ def table(task: str, reports: dict) -> None:
     cells = []
     for _, rep, key in cols:
         r = rep["ranking"].get(key)
-        cells.append("-" if not r or r["kendall_tau_b"] is None else
-                     f"{r['kendall_tau_b']:.2f} [{r['kendall_ci'][0]:.2f}, {r['kendall_ci'][1]:.2f}]")
+        cells.append(
+            "-"
+            if not r or r["kendall_tau_b"] is None
+            else f"{r['kendall_tau_b']:.2f} [{r['kendall_ci'][0]:.2f}, {r['kendall_ci'][1]:.2f}]"
+        )
     print("| Kendall tau-b vs level | " + " | ".join(cells) + " |")
-    print("| Kendall tau-b of the level means | " + " | ".join(
-        "-" if rep["ranking"].get(key, {}).get("kendall_tau_b_of_level_means") is None else
-        f"{rep['ranking'][key]['kendall_tau_b_of_level_means']:.2f}" for _, rep, key in cols) + " |")
+    print(
+        "| Kendall tau-b of the level means | "
+        + " | ".join(
+            "-"
+            if rep["ranking"].get(key, {}).get("kendall_tau_b_of_level_means") is None
+            else f"{rep['ranking'][key]['kendall_tau_b_of_level_means']:.2f}"
+            for _, rep, key in cols
+        )
+        + " |"
+    )
 
 
-SCORED = (("heuristic", "airl", "heuristic"), ("r_psi (AIRL)", "airl", "reward"), ("V_phi (AIRL)", "airl", "value"),
-          ("h (AIRL)", "airl", "potential"), ("r (GAIL)", "gail", "reward"), ("V (GAIL)", "gail", "value"))
+SCORED = (
+    ("heuristic", "airl", "heuristic"),
+    ("r_psi (AIRL)", "airl", "reward"),
+    ("V_phi (AIRL)", "airl", "value"),
+    ("h (AIRL)", "airl", "potential"),
+    ("r (GAIL)", "gail", "reward"),
+    ("V (GAIL)", "gail", "value"),
+)
 
 
 def across_seeds(files: list[Path]) -> None:
     """Per task and score, tau-b of the level means (per-trajectory tau-b) for each file written by a run of this
     script, one training seed each."""
     saved = [json.loads(f.read_text()) for f in files]
-    seeds = [next((a["run"].rsplit("-s", 1)[-1] for t in d["tasks"].values() for a in t.values()), "?")
-             for d in saved]
+    seeds = [next((a["run"].rsplit("-s", 1)[-1] for t in d["tasks"].values() for a in t.values()), "?") for d in saved]
     print("\n| task | score | " + " | ".join(f"seed {s}" for s in seeds) + " |")
     print("|---|---|" + "---|" * len(seeds))
     for task in TASKS:
@@ -116,8 +138,11 @@ def across_seeds(files: list[Path]) -> None:
             cells = []
             for d in saved:
                 r = d["tasks"].get(task, {}).get(algorithm, {}).get("ranking", {}).get(key)
-                cells.append("-" if not r or r["kendall_tau_b"] is None else
-                             f"{r['kendall_tau_b_of_level_means']:.2f} ({r['kendall_tau_b']:.2f})")
+                cells.append(
+                    "-"
+                    if not r or r["kendall_tau_b"] is None
+                    else f"{r['kendall_tau_b_of_level_means']:.2f} ({r['kendall_tau_b']:.2f})"
+                )
             if any(c != "-" for c in cells):
                 print(f"| {task} | {label} | " + " | ".join(cells) + " |")
 
@@ -150,17 +175,22 @@ def main() -> None:
     ap.add_argument("--per-level", type=int, default=10)
     ap.add_argument("--timing-only", action="store_true")
     ap.add_argument("--out", type=Path, default=Path("docs/assess_cohort.json"))
-    ap.add_argument("--irl-root", type=Path, default=Path("runs/bench-irl"),
-                    help="where bench/irl_tasks.py wrote its runs")
+    ap.add_argument(
+        "--irl-root", type=Path, default=Path("runs/bench-irl"), help="where bench/irl_tasks.py wrote its runs"
+    )
     ap.add_argument("--seed", type=int, default=0, help="the inverse-RL runs' training seed")
-    ap.add_argument("--across", nargs="+", type=Path, metavar="JSON",
-                    help="only print tau-b of the level means per seed from files earlier calls wrote (--out)")
+    ap.add_argument(
+        "--across",
+        nargs="+",
+        type=Path,
+        metavar="JSON",
+        help="only print tau-b of the level means per seed from files earlier calls wrote (--out)",
+    )
     args = ap.parse_args()
     if args.across:
         across_seeds(args.across)
         return
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"load {os.getloadavg()[0]:.1f}")
+    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}")
     results = {}
     if not args.timing_only:
         for task in args.tasks:
@@ -170,10 +200,17 @@ def main() -> None:
     if t is None:
         print(f"\nno TraceLines AIRL run under {args.irl_root} for seed {args.seed}: scoring time not measured")
     else:
-        print(f"\nscoring {t['trajectories']} TraceLines trajectories ({t['samples']} samples, replay and networks "
-              f"included): {t['seconds']:.2f} s ({t['samples_per_s']:,.0f} samples/s)")
-    summary = {task: {alg: {"run": r["run"], "ranking": r["report"]["ranking"], "groups": r["report"]["groups"]}
-                      for alg, r in res.items()} for task, res in results.items()}
+        print(
+            f"\nscoring {t['trajectories']} TraceLines trajectories ({t['samples']} samples, replay and networks "
+            f"included): {t['seconds']:.2f} s ({t['samples_per_s']:,.0f} samples/s)"
+        )
+    summary = {
+        task: {
+            alg: {"run": r["run"], "ranking": r["report"]["ranking"], "groups": r["report"]["groups"]}
+            for alg, r in res.items()
+        }
+        for task, res in results.items()
+    }
     saved = json.loads(args.out.read_text()) if args.out.exists() else {"tasks": {}}
     saved["tasks"].update(summary)
     if t is not None:

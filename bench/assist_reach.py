@@ -59,24 +59,41 @@ def main() -> None:
     env = FastEnv(spec)
     suggester = Suggester(spec, nets.policy, args.horizon)
     expert = ScriptedExpert(env)
-    result = {"run": str(args.run), "horizon_s": args.horizon, "every_steps": args.every,
-              "episodes": args.episodes, "epsilon": args.epsilon}
+    result = {
+        "run": str(args.run),
+        "horizon_s": args.horizon,
+        "every_steps": args.every,
+        "episodes": args.episodes,
+        "epsilon": args.epsilon,
+    }
     result["load_average_before"] = os.getloadavg()[0]
     for name, eps in [("expert", 0.0)] + [(f"degraded eps={e:g}", e) for e in args.epsilon]:
-        rows = [r for s in range(30000, 30000 + args.episodes) for r in sample(env, suggester, expert, eps, s,
-                                                                                args.every)]
+        rows = [
+            r for s in range(30000, 30000 + args.episodes) for r in sample(env, suggester, expert, eps, s, args.every)
+        ]
         reached, ms = np.array([r[0] for r in rows]), np.array([r[1] for r in rows])
-        result[name] = {"epsilon": eps, "states": len(rows), "reached_share": float(reached.mean()),
-                        "ms_median": float(np.median(ms)), "ms_p95": float(np.percentile(ms, 95)),
-                        "ms_max": float(ms.max())}
-        print(f"{name}: {reached.mean():.1%} of {len(rows)} states reach the next avatar; "
-              f"suggestion {np.median(ms):.1f} ms median, {np.percentile(ms, 95):.1f} ms p95, {ms.max():.1f} ms max")
+        result[name] = {
+            "epsilon": eps,
+            "states": len(rows),
+            "reached_share": float(reached.mean()),
+            "ms_median": float(np.median(ms)),
+            "ms_p95": float(np.percentile(ms, 95)),
+            "ms_max": float(ms.max()),
+        }
+        print(
+            f"{name}: {reached.mean():.1%} of {len(rows)} states reach the next avatar; "
+            f"suggestion {np.median(ms):.1f} ms median, {np.percentile(ms, 95):.1f} ms p95, {ms.max():.1f} ms max"
+        )
     if args.baselines:  # the same measurement with policies that know nothing: what "reaching" costs by chance
         rng = np.random.default_rng(0)
         for name, pol in (("noop", lambda o: np.zeros(len(o), int)), ("random", lambda o: rng.integers(0, 11, len(o)))):
             base = Suggester(spec, pol, args.horizon)
-            rows = [r for eps in [0.0, *args.epsilon] for s in range(30000, 30000 + args.episodes)
-                    for r in sample(env, base, expert, eps, s, args.every)]
+            rows = [
+                r
+                for eps in [0.0, *args.epsilon]
+                for s in range(30000, 30000 + args.episodes)
+                for r in sample(env, base, expert, eps, s, args.every)
+            ]
             share = float(np.mean([r[0] for r in rows]))
             result[f"baseline {name} policy"] = {"states": len(rows), "reached_share": share}
             print(f"baseline {name} policy: {share:.1%} of {len(rows)} states (all kinds)")

@@ -1,6 +1,6 @@
 """Behavioural cloning from scripted-expert demonstrations: accuracy, training time, evaluation.
 
-    python bench/bc_baseline.py [--spec specs/tracelines.yaml] [--demos 20] [--epochs 30]
+python bench/bc_baseline.py [--spec specs/tracelines.yaml] [--demos 20] [--epochs 30]
 """
 
 from __future__ import annotations
@@ -36,10 +36,14 @@ def main() -> None:
     losses = behaviour_clone(model, venv, obs, actions, epochs=args.epochs)
     seconds = time.perf_counter() - t0
     summary, _ = evaluate(FastEnv(spec), policy_function(model, venv), list(range(10000, 10020)))
-    print(f"{spec.name}: {args.demos} demos, {len(obs)} pairs, {args.epochs} epochs in {seconds:.1f} s, "
-          f"loss {losses[0]:.2f} -> {losses[-1]:.2f}, action accuracy {action_accuracy(model, venv, obs, actions):.2f}")
-    print(f"evaluation on 20 seeds: success {summary['success_rate']:.0%}, "
-          f"subtasks {summary['subtasks_completed']:.1%}, episode time {summary['episode_time_mean']:.1f} s")
+    print(
+        f"{spec.name}: {args.demos} demos, {len(obs)} pairs, {args.epochs} epochs in {seconds:.1f} s, "
+        f"loss {losses[0]:.2f} -> {losses[-1]:.2f}, action accuracy {action_accuracy(model, venv, obs, actions):.2f}"
+    )
+    print(
+        f"evaluation on 20 seeds: success {summary['success_rate']:.0%}, "
+        f"subtasks {summary['subtasks_completed']:.1%}, episode time {summary['episode_time_mean']:.1f} s"
+    )
 
 
 if __name__ == "__main__":

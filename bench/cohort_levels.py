@@ -43,9 +43,16 @@ def measure(task: str, levels: int, per_level: int, seed: int) -> dict:
     table = level_table(rows)
     means = [e["return"] for e in table]
     ordered = all(a < b for a, b in zip(means, means[1:]))
-    return {"task": task, "table": table, "tau_b": float(tau), "strict_order": ordered,
-            "pairs": len(pairs), "discordant": discordant,
-            "generate_s": generated, "total_s": time.perf_counter() - t0}
+    return {
+        "task": task,
+        "table": table,
+        "tau_b": float(tau),
+        "strict_order": ordered,
+        "pairs": len(pairs),
+        "discordant": discordant,
+        "generate_s": generated,
+        "total_s": time.perf_counter() - t0,
+    }
 
 
 def main() -> None:
@@ -61,14 +68,18 @@ def main() -> None:
     for task in a.tasks.split(","):
         r = measure(task, a.levels, a.per_level, a.seed)
         results.append(r)
-        print(f"\n{task}: tau-b {r['tau_b']:.3f}, level means in strict order: {r['strict_order']}, "
-              f"{r['discordant']} of {r['pairs']} cross-level pairs out of order, "
-              f"generated in {r['generate_s']:.1f} s (with replay {r['total_s']:.1f} s)")
+        print(
+            f"\n{task}: tau-b {r['tau_b']:.3f}, level means in strict order: {r['strict_order']}, "
+            f"{r['discordant']} of {r['pairs']} cross-level pairs out of order, "
+            f"generated in {r['generate_s']:.1f} s (with replay {r['total_s']:.1f} s)"
+        )
         print("| level | return | subtasks | duration (s) |")
         print("|---|---|---|---|")
         for e in r["table"]:
-            print(f"| {e['skill']} | {e['return']:.1f} ± {e['return_sd']:.1f} | {e['subtasks']:.1f} ± "
-                  f"{e['subtasks_sd']:.1f} | {e['duration']:.1f} ± {e['duration_sd']:.1f} |")
+            print(
+                f"| {e['skill']} | {e['return']:.1f} ± {e['return_sd']:.1f} | {e['subtasks']:.1f} ± "
+                f"{e['subtasks_sd']:.1f} | {e['duration']:.1f} ± {e['duration_sd']:.1f} |"
+            )
     if a.json:
         a.json.write_text(json.dumps(results, indent=2))
 

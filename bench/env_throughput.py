@@ -67,17 +67,33 @@ def machine_info() -> dict:
     except OSError:
         load = []
     try:
-        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], check=False, cwd=ROOT, text=True,
-                                capture_output=True, timeout=5).stdout.strip() or None
+        commit = (
+            subprocess.run(
+                ["git", "rev-parse", "--short", "HEAD"],
+                check=False,
+                cwd=ROOT,
+                text=True,
+                capture_output=True,
+                timeout=5,
+            ).stdout.strip()
+            or None
+        )
     except (OSError, subprocess.SubprocessError):
         commit = None
     return {
         "date_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
-        "cpu": cpu, "cpu_mhz": mhz, "cores": os.cpu_count(),
+        "cpu": cpu,
+        "cpu_mhz": mhz,
+        "cores": os.cpu_count(),
         "cores_usable": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
-        "loadavg": load, "platform": platform.platform(),
-        "python": platform.python_version(), "numpy": np.__version__, "mujoco": mujoco.__version__,
-        "gymnasium": gymnasium.__version__, "fastrl": fastrl.__version__, "git_commit": commit,
+        "loadavg": load,
+        "platform": platform.platform(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "mujoco": mujoco.__version__,
+        "gymnasium": gymnasium.__version__,
+        "fastrl": fastrl.__version__,
+        "git_commit": commit,
         "mujoco_gl": os.environ.get("MUJOCO_GL"),
     }
 
@@ -196,7 +212,7 @@ def bench_task(name: str, seconds: float, rounds: int, seed: int, log) -> dict:
     cursor = {"env": 0, "physics": 0, "gym": 0}
     kinds = ["env", "physics"] + (["gym"] if genv is not None else [])
     for r in range(rounds):
-        for kind in kinds[r % len(kinds):] + kinds[:r % len(kinds)]:  # rotate the order each round
+        for kind in kinds[r % len(kinds) :] + kinds[: r % len(kinds)]:  # rotate the order each round
             if kind == "physics":
                 secs = physics_loop(model, data, ctrls, states, substeps, cursor[kind], n)
             else:
@@ -229,11 +245,20 @@ def bench_task(name: str, seconds: float, rounds: int, seed: int, log) -> dict:
     if genv is not None:
         genv.close()
 
-    out = {"substeps": substeps, "timestep_s": float(model.opt.timestep), "steps_per_round": n,
-           "rounds": rounds, "setup_s": setup_s, "mean_contacts": ncon,
-           "env": stats(runs["env"], n), "physics": stats(runs["physics"], n),
-           "env_resets": resets["env"], "env_steps": n * rounds,
-           "reset_ms": {"median": statistics.median(reset_ms), "min": min(reset_ms)}, "render": render}
+    out = {
+        "substeps": substeps,
+        "timestep_s": float(model.opt.timestep),
+        "steps_per_round": n,
+        "rounds": rounds,
+        "setup_s": setup_s,
+        "mean_contacts": ncon,
+        "env": stats(runs["env"], n),
+        "physics": stats(runs["physics"], n),
+        "env_resets": resets["env"],
+        "env_steps": n * rounds,
+        "reset_ms": {"median": statistics.median(reset_ms), "min": min(reset_ms)},
+        "render": render,
+    }
     env_us, phys_us = out["env"]["median_us"], out["physics"]["median_us"]
     out["env"]["steps_per_s"] = 1e6 / env_us
     out["env"]["best_steps_per_s"] = 1e6 / out["env"]["min_us"]
@@ -265,14 +290,20 @@ def print_report(console, info: dict, results: dict, elapsed: float) -> None:
     from rich.table import Table
 
     console.print(f"[bold]fastrl env throughput[/]  {info['date_utc']}  (git {info['git_commit']})")
-    console.print(f"CPU: {info['cpu']} @ {info['cpu_mhz']} MHz, {info['cores']} cores "
-                  f"({info['cores_usable']} usable), load avg {' '.join(info['loadavg'])}")
-    console.print(f"Python {info['python']}, numpy {info['numpy']}, mujoco {info['mujoco']}, "
-                  f"gymnasium {info['gymnasium']}, fastrl {info['fastrl']}, "
-                  f"MUJOCO_GL={info['mujoco_gl']}")
+    console.print(
+        f"CPU: {info['cpu']} @ {info['cpu_mhz']} MHz, {info['cores']} cores "
+        f"({info['cores_usable']} usable), load avg {' '.join(info['loadavg'])}"
+    )
+    console.print(
+        f"Python {info['python']}, numpy {info['numpy']}, mujoco {info['mujoco']}, "
+        f"gymnasium {info['gymnasium']}, fastrl {info['fastrl']}, "
+        f"MUJOCO_GL={info['mujoco_gl']}"
+    )
     names = list(results)
-    console.print("Single env, state observation, the spec's action mode; times are medians "
-                  "over rounds, \\[min | max] in brackets.")
+    console.print(
+        "Single env, state observation, the spec's action mode; times are medians "
+        "over rounds, \\[min | max] in brackets."
+    )
     table = Table()
     table.add_column("metric", style="bold")
     for name in names:
@@ -292,12 +323,13 @@ def print_report(console, info: dict, results: dict, elapsed: float) -> None:
 
     row("substeps x timestep", lambda r: f"{r['substeps']} x {1e3 * r['timestep_s']:.1f} ms")
     row("rounds x steps", lambda r: f"{r['rounds']} x {r['steps_per_round']}")
-    row("env steps/s (best)", lambda r: f"{r['env']['steps_per_s']:,.0f} "
-                                        f"({r['env']['best_steps_per_s']:,.0f})")
+    row("env steps/s (best)", lambda r: f"{r['env']['steps_per_s']:,.0f} ({r['env']['best_steps_per_s']:,.0f})")
     row("env µs/step", lambda r: spread(r["env"]))
     row("  resets in timed steps", lambda r: f"{r['env_resets']} / {r['env_steps']:,}")
-    row("physics-only env steps/s (best)", lambda r: f"{r['physics']['steps_per_s']:,.0f} "
-                                                     f"({r['physics']['best_steps_per_s']:,.0f})")
+    row(
+        "physics-only env steps/s (best)",
+        lambda r: f"{r['physics']['steps_per_s']:,.0f} ({r['physics']['best_steps_per_s']:,.0f})",
+    )
     row("physics µs/env step", lambda r: spread(r["physics"]))
     row("  physics µs/substep", lambda r: f"{r['physics']['us_per_substep']:.1f}")
     row("  contacts per step (mean)", lambda r: f"{r['mean_contacts']:.2f}")
@@ -308,26 +340,39 @@ def print_report(console, info: dict, results: dict, elapsed: float) -> None:
     row("  gym - env µs/step", lambda r: f"{r['gym']['wrapper_us']:+.1f}")
     row("  wrappers alone µs/step", lambda r: f"{r['gym']['wrapper_isolated_us']:.2f}")
     row("reset() ms (min)", lambda r: f"{r['reset_ms']['median']:.2f} ({r['reset_ms']['min']:.2f})")
-    row("render() ms (min)", lambda r: (f"{r['render']['median_ms']:.2f} ({r['render']['min_ms']:.2f})"
-                                        if "median_ms" in r["render"] else r["render"]["error"][:40]))
-    row("  first render() ms", lambda r: f"{r['render']['first_ms']:.0f} "
-                                         f"{'x'.join(map(str, r['render']['shape']))}")
+    row(
+        "render() ms (min)",
+        lambda r: (
+            f"{r['render']['median_ms']:.2f} ({r['render']['min_ms']:.2f})"
+            if "median_ms" in r["render"]
+            else r["render"]["error"][:40]
+        ),
+    )
+    row("  first render() ms", lambda r: f"{r['render']['first_ms']:.0f} {'x'.join(map(str, r['render']['shape']))}")
     row(f"≥ {TARGET_STEPS_PER_S:,.0f} env steps/s", lambda r: _verdict(r["pass_steps_per_s"]))
     row("overhead ≤ physics", lambda r: _verdict(r["pass_overhead"]))
     console.print(table)
-    console.print(f"Targets: ≥ {TARGET_STEPS_PER_S:,.0f} env steps/s per task (single env, median), "
-                  "env overhead ≤ physics time. Reported, not asserted.")
+    console.print(
+        f"Targets: ≥ {TARGET_STEPS_PER_S:,.0f} env steps/s per task (single env, median), "
+        "env overhead ≤ physics time. Reported, not asserted."
+    )
     for name, r in results.items():
         if r["physics"]["steps_per_s"] < TARGET_STEPS_PER_S:
-            console.print(f"  {name}: physics alone allows {r['physics']['steps_per_s']:,.0f} "
-                          f"steps/s < {TARGET_STEPS_PER_S:,.0f}: the model must get cheaper.")
+            console.print(
+                f"  {name}: physics alone allows {r['physics']['steps_per_s']:,.0f} "
+                f"steps/s < {TARGET_STEPS_PER_S:,.0f}: the model must get cheaper."
+            )
     loads = [float(x) for x in info["loadavg"][:1] + info.get("loadavg_end", [])[:1]]
     busy = bool(loads) and max(loads) > (info["cores_usable"] or info["cores"] or 1)
-    console.print(f"Load average {' '.join(info['loadavg'])} at the start, "
-                  f"{' '.join(info.get('loadavg_end', []))} at the end"
-                  + (": other jobs shared the CPU, figures are pessimistic." if busy else "."))
-    console.print(f"[dim]Overhead = env µs/step - physics µs/step (medians); physics replays the "
-                  f"env's own ctrl trajectory. Total time {elapsed:.0f} s.[/dim]")
+    console.print(
+        f"Load average {' '.join(info['loadavg'])} at the start, "
+        f"{' '.join(info.get('loadavg_end', []))} at the end"
+        + (": other jobs shared the CPU, figures are pessimistic." if busy else ".")
+    )
+    console.print(
+        f"[dim]Overhead = env µs/step - physics µs/step (medians); physics replays the "
+        f"env's own ctrl trajectory. Total time {elapsed:.0f} s.[/dim]"
+    )
 
 
 # ---- profile -------------------------------------------------------------------------------
@@ -347,16 +392,26 @@ def profile_task(name: str, seconds: float, seed: int, top: int, console) -> dic
     rows = []
     for (file, line, func), (_, ncalls, tottime, cumtime, _) in st.stats.items():
         where = f"{Path(file).name}:{line}({func})" if line else func
-        rows.append({"function": where, "calls_per_step": ncalls / n,
-                     "tottime_us_per_step": 1e6 * tottime / n, "cumtime_us_per_step": 1e6 * cumtime / n})
+        rows.append(
+            {
+                "function": where,
+                "calls_per_step": ncalls / n,
+                "tottime_us_per_step": 1e6 * tottime / n,
+                "cumtime_us_per_step": 1e6 * cumtime / n,
+            }
+        )
     rows.sort(key=lambda r: -r["tottime_us_per_step"])
     total = sum(r["tottime_us_per_step"] for r in rows)
-    console.print(f"[bold]cProfile of {name}.step[/], {n} steps: {total:.0f} µs/step under "
-                  "the profiler (it inflates Python calls)")
+    console.print(
+        f"[bold]cProfile of {name}.step[/], {n} steps: {total:.0f} µs/step under "
+        "the profiler (it inflates Python calls)"
+    )
     console.print("   self µs     cum µs  calls/step  function")
     for r in rows[:top]:
-        console.print(f"{r['tottime_us_per_step']:10.1f} {r['cumtime_us_per_step']:10.1f} "
-                      f"{r['calls_per_step']:11.1f}  {r['function']}")
+        console.print(
+            f"{r['tottime_us_per_step']:10.1f} {r['cumtime_us_per_step']:10.1f} "
+            f"{r['calls_per_step']:11.1f}  {r['function']}"
+        )
     return {"task": name, "steps": n, "total_us_per_step": total, "top": rows[:top]}
 
 
@@ -368,8 +423,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--tasks", default=",".join(TASKS), help="comma-separated spec names in specs/")
     p.add_argument("--seed", type=int, default=0, help="seed of the action sequence and resets")
     p.add_argument("--json", type=Path, default=None, help="write all figures to this JSON file")
-    p.add_argument("--profile", metavar="TASK", default=None,
-                   help="instead of the benchmark, cProfile TASK's env step and list the top costs")
+    p.add_argument(
+        "--profile",
+        metavar="TASK",
+        default=None,
+        help="instead of the benchmark, cProfile TASK's env step and list the top costs",
+    )
     p.add_argument("--top", type=int, default=15, help="rows of the --profile listing")
     args = p.parse_args(argv)
 
@@ -378,8 +437,7 @@ def main(argv: list[str] | None = None) -> int:
     console = Console(width=None if sys.stdout.isatty() else 120)
     info = machine_info()
     if args.profile:
-        out = {"machine": info, "profile": profile_task(args.profile, 3 * args.seconds, args.seed,
-                                                        args.top, console)}
+        out = {"machine": info, "profile": profile_task(args.profile, 3 * args.seconds, args.seed, args.top, console)}
         if args.json:
             args.json.write_text(json.dumps(out, indent=2))
         return 0
@@ -397,11 +455,15 @@ def main(argv: list[str] | None = None) -> int:
     print_report(console, info, results, elapsed)
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        config = {"seconds": args.seconds, "rounds": args.rounds, "seed": args.seed,
-                  "targets": {"env_steps_per_s": TARGET_STEPS_PER_S,
-                              "overhead_over_physics": TARGET_OVERHEAD_RATIO}}
-        args.json.write_text(json.dumps({"machine": info, "config": config, "elapsed_s": elapsed,
-                                         "tasks": results}, indent=2))
+        config = {
+            "seconds": args.seconds,
+            "rounds": args.rounds,
+            "seed": args.seed,
+            "targets": {"env_steps_per_s": TARGET_STEPS_PER_S, "overhead_over_physics": TARGET_OVERHEAD_RATIO},
+        }
+        args.json.write_text(
+            json.dumps({"machine": info, "config": config, "elapsed_s": elapsed, "tasks": results}, indent=2)
+        )
         console.print(f"wrote {args.json}")
     return 0
 

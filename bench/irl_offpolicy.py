@@ -33,19 +33,38 @@ VARIANTS = {
     "no-current-rollout": ["irl.discriminator.spectral_norm=true", "irl.discriminator.current_rollout=false"],
     "no-spectral-norm": ["irl.discriminator.spectral_norm=false", "irl.discriminator.current_rollout=true"],
 }
-COMMON = ["train.algo=SAC", "train.sac.net_arch=[128, 128]", "train.sac.batch_size=256",
-          "train.sac.learning_starts=5000", "irl.algorithm=airl", "irl.discriminator.steps=16",
-          "irl.discriminator.learning_rate=1e-3", "evaluate.periodic_episodes=10", "train.checkpoint_every=50000",
-          "train.keep_checkpoints=100", "evaluate.record_episodes=5"]
+COMMON = [
+    "train.algo=SAC",
+    "train.sac.net_arch=[128, 128]",
+    "train.sac.batch_size=256",
+    "train.sac.learning_starts=5000",
+    "irl.algorithm=airl",
+    "irl.discriminator.steps=16",
+    "irl.discriminator.learning_rate=1e-3",
+    "evaluate.periodic_episodes=10",
+    "train.checkpoint_every=50000",
+    "train.keep_checkpoints=100",
+    "evaluate.record_episodes=5",
+]
 SCHEDULES = {  # SAC schedules of bench/sac_speed.py
     # 8 envs, 32 steps each between 32 updates (1 update per 8 steps); the discriminator fits after every rollout
     "8x32": ["train.n_envs=8", "train.sac.train_freq=32", "train.sac.gradient_steps=32"],
     # stable-baselines3's own SAC and schedule (1 env, 1 update per step, [256, 256]), the same discriminator work
-    "sb3": ["train.n_envs=1", "train.sac.train_freq=1", "train.sac.gradient_steps=1", "train.sac.net_arch=[256, 256]",
-            "train.sac.lean_update=false", "irl.discriminator.every=256"],
+    "sb3": [
+        "train.n_envs=1",
+        "train.sac.train_freq=1",
+        "train.sac.gradient_steps=1",
+        "train.sac.net_arch=[256, 256]",
+        "train.sac.lean_update=false",
+        "irl.discriminator.every=256",
+    ],
     # 4 envs, 1 update per 4 steps; the discriminator fits every 256 steps on the samples since its last fit
-    "4env-quarter": ["train.n_envs=4", "train.sac.train_freq=1", "train.sac.gradient_steps=1",
-                     "irl.discriminator.every=256"],
+    "4env-quarter": [
+        "train.n_envs=4",
+        "train.sac.train_freq=1",
+        "train.sac.gradient_steps=1",
+        "irl.discriminator.every=256",
+    ],
 }
 
 
@@ -56,9 +75,16 @@ def run(args) -> None:
     for seed in args.seeds:
         for variant in args.variants:
             root = Path(args.root) / variant
-            sets = [*COMMON, *SCHEDULES[args.schedule], *VARIANTS[variant], f"actions.mode={args.mode}",
-                    f"train.seed={seed}", f"train.timesteps={args.steps}", f"evaluate.periodic_every={args.eval_every}",
-                    *args.set]
+            sets = [
+                *COMMON,
+                *SCHEDULES[args.schedule],
+                *VARIANTS[variant],
+                f"actions.mode={args.mode}",
+                f"train.seed={seed}",
+                f"train.timesteps={args.steps}",
+                f"evaluate.periodic_every={args.eval_every}",
+                *args.set,
+            ]
             t0 = time.perf_counter()
             path = start_run("specs/tracelines.yaml", sets, root, progress=not args.quiet)
             print(f"{variant} seed {seed}: {path} in {time.perf_counter() - t0:.0f} s", flush=True)
@@ -72,8 +98,7 @@ def report(args) -> None:
     import matplotlib.pyplot as plt
 
     print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; root {args.root}")
-    print("| variant | seeds | final subtasks, mean ± sd | final success | steps to 90% (per seed) | "
-          "train steps/s |")
+    print("| variant | seeds | final subtasks, mean ± sd | final success | steps to 90% (per seed) | train steps/s |")
     print("|---|---|---|---|---|---|")
     fig, ax = plt.subplots(figsize=(7, 4.2))
     rows = []
@@ -93,16 +118,30 @@ def report(args) -> None:
             to90.append(hit)
             fps.append(meta["train_fps"])
             curves.append((steps, subs))
-            rows.append({"variant": variant, "run": str(run_dir), "final_subtasks": finals[-1],
-                         "final_success": success[-1], "steps_to_90": hit, "train_fps": fps[-1],
-                         "curve": {"steps": steps, "subtasks": subs}})
+            rows.append(
+                {
+                    "variant": variant,
+                    "run": str(run_dir),
+                    "final_subtasks": finals[-1],
+                    "final_success": success[-1],
+                    "steps_to_90": hit,
+                    "train_fps": fps[-1],
+                    "curve": {"steps": steps, "subtasks": subs},
+                }
+            )
         plot_mean_range(ax, curves, f"{variant} (n={len(runs)})")
         hits = ", ".join(f"{h:,}" if h else "-" for h in to90)
-        print(f"| {variant} | {len(runs)} | {np.mean(finals):.1%} ± {np.std(finals):.1%} | {np.mean(success):.0%} | "
-              f"{hits} | {np.mean(fps):.0f} |")
+        print(
+            f"| {variant} | {len(runs)} | {np.mean(finals):.1%} ± {np.std(finals):.1%} | {np.mean(success):.0%} | "
+            f"{hits} | {np.mean(fps):.0f} |"
+        )
     ax.axhline(0.9, color="grey", ls=":", lw=1)
-    ax.set(title="Off-policy AIRL (SAC) on TraceLines: mean and range over seeds", xlabel="environment steps",
-           ylabel="subtasks completed (10 eval seeds)", ylim=(-0.02, 1.02))
+    ax.set(
+        title="Off-policy AIRL (SAC) on TraceLines: mean and range over seeds",
+        xlabel="environment steps",
+        ylabel="subtasks completed (10 eval seeds)",
+        ylim=(-0.02, 1.02),
+    )
     ax.legend()
     fig.tight_layout()
     save_figure(fig, args.figure, rows)
@@ -115,8 +154,12 @@ def main() -> None:
     ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     ap.add_argument("--steps", type=int, default=60_000)
-    ap.add_argument("--mode", default="rates", choices=["rates", "continuous"],
-                    help="action mode: rates (5 portal rates, first order) or continuous (7 tip accelerations)")
+    ap.add_argument(
+        "--mode",
+        default="rates",
+        choices=["rates", "continuous"],
+        help="action mode: rates (5 portal rates, first order) or continuous (7 tip accelerations)",
+    )
     ap.add_argument("--schedule", default="4env-quarter", choices=list(SCHEDULES), help="SAC update schedule")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="more spec overrides")
     ap.add_argument("--eval-every", type=int, default=10_000, help="steps between evaluations during training")

@@ -96,8 +96,18 @@ def rollouts(env, policies: dict[int, object], episodes: int) -> list[dict]:
     for steps, policy in policies.items():
         for seed in range(20000, 20000 + episodes):
             obs, rewards, success, terms = rollout(env, policy, seed)
-            rows.append({"policy_steps": steps, "seed": seed, "heuristic": float(sum(rewards.tolist())),
-                         "terms": terms, "success": success, "steps": len(obs) - 1, "obs": obs, "rewards": rewards})
+            rows.append(
+                {
+                    "policy_steps": steps,
+                    "seed": seed,
+                    "heuristic": float(sum(rewards.tolist())),
+                    "terms": terms,
+                    "success": success,
+                    "steps": len(obs) - 1,
+                    "obs": obs,
+                    "rewards": rewards,
+                }
+            )
     return rows
 
 
@@ -110,32 +120,53 @@ def scored(rows: list[dict], nets, max_steps: int) -> list[dict]:
         learned_sum = float(nets.reward(obs).sum())
         tail = (max_steps - (len(obs) - 1)) * nets.absorbing_reward() if success else 0.0
         discount = nets.gamma ** np.arange(len(r["rewards"]))
-        out.append({k: v for k, v in r.items() if k not in ("obs", "rewards")}
-                   | {"learned": nets.learned_return(obs, success), "learned_sum": learned_sum,
-                      "learned_horizon": learned_sum + tail,
-                      "heuristic_discounted": float(np.sum(discount * r["rewards"]))})
+        out.append(
+            {k: v for k, v in r.items() if k not in ("obs", "rewards")}
+            | {
+                "learned": nets.learned_return(obs, success),
+                "learned_sum": learned_sum,
+                "learned_horizon": learned_sum + tail,
+                "heuristic_discounted": float(np.sum(discount * r["rewards"])),
+            }
+        )
     return out
 
 
 def correlations(rows: list[dict], silent: list[str], key=lambda r: r["policy_steps"]) -> dict:
     """Spearman's rho of heuristic against each learned return over rollouts, and over per-policy means."""
-    rho = {name: float(spearmanr([r[heuristic] for r in rows], [r[learned] for r in rows]).statistic)
-           for name, (heuristic, learned) in READINGS.items()}
+    rho = {
+        name: float(spearmanr([r[heuristic] for r in rows], [r[learned] for r in rows]).statistic)
+        for name, (heuristic, learned) in READINGS.items()
+    }
     policies = list(dict.fromkeys(key(r) for r in rows))
     mean_of = lambda f: [np.mean([r[f] for r in rows if key(r) == p]) for p in policies]  # noqa: E731
     rho["spearman_policy_means"] = float(spearmanr(mean_of("heuristic"), mean_of("learned")).statistic)
-    intervals = {f"{name}_ci": policy_bootstrap(rows, key, *fields) for name, fields in READINGS.items()
-                 if name != "spearman_horizon"}
+    intervals = {
+        f"{name}_ci": policy_bootstrap(rows, key, *fields)
+        for name, fields in READINGS.items()
+        if name != "spearman_horizon"
+    }
     steps = [-r["steps"] for r in rows]  # a reward of -1 per step ranks rollouts by length, discounted or not
-    length = {name: float(spearmanr([r[heuristic] for r in rows], steps).statistic)
-              for name, (heuristic, _) in READINGS.items() if name != "spearman_horizon"}
-    return {"policies": len(policies), "rollouts": len(rows), **rho, **intervals, "length_baseline": length,
-            "spearman_without": without_terms(rows), "silent_terms": silent,
-            "spearman_silent_scaled": silent_scaled(rows, silent)}
+    length = {
+        name: float(spearmanr([r[heuristic] for r in rows], steps).statistic)
+        for name, (heuristic, _) in READINGS.items()
+        if name != "spearman_horizon"
+    }
+    return {
+        "policies": len(policies),
+        "rollouts": len(rows),
+        **rho,
+        **intervals,
+        "length_baseline": length,
+        "spearman_without": without_terms(rows),
+        "silent_terms": silent,
+        "spearman_silent_scaled": silent_scaled(rows, silent),
+    }
 
 
-def policy_bootstrap(rows: list[dict], key, heuristic: str = "heuristic", learned: str = "learned",
-                     resamples: int = 1000, seed: int = 0) -> list[float]:
+def policy_bootstrap(
+    rows: list[dict], key, heuristic: str = "heuristic", learned: str = "learned", resamples: int = 1000, seed: int = 0
+) -> list[float]:
     """95% interval of rho when the policies are resampled with replacement (each with all its rollouts)."""
     groups: dict[object, list[int]] = {}
     for i, r in enumerate(rows):
@@ -153,8 +184,11 @@ def policy_bootstrap(rows: list[dict], key, heuristic: str = "heuristic", learne
 def without_terms(rows: list[dict]) -> dict[str, float]:
     """rho of the learned return against the heuristic return less one weighted term, for each term that varies."""
     learned = [r["learned"] for r in rows]
-    return {name: float(spearmanr([r["heuristic"] - r["terms"][name] for r in rows], learned).statistic)
-            for name in rows[0]["terms"] if np.ptp([r["terms"][name] for r in rows]) > 0}
+    return {
+        name: float(spearmanr([r["heuristic"] - r["terms"][name] for r in rows], learned).statistic)
+        for name in rows[0]["terms"]
+        if np.ptp([r["terms"][name] for r in rows]) > 0
+    }
 
 
 def silent_terms(env, run: Path) -> list[str]:
@@ -177,8 +211,14 @@ def silent_scaled(rows: list[dict], silent: list[str]) -> dict[str, float]:
     if not silent:
         return {}
     learned = [r["learned"] for r in rows]
-    return {f"{k:g}": float(spearmanr([r["heuristic"] - (1.0 - k) * sum(r["terms"][n] for n in silent) for r in rows],
-                                      learned).statistic) for k in SILENT_SCALES}
+    return {
+        f"{k:g}": float(
+            spearmanr(
+                [r["heuristic"] - (1.0 - k) * sum(r["terms"][n] for n in silent) for r in rows], learned
+            ).statistic
+        )
+        for k in SILENT_SCALES
+    }
 
 
 def setting(spec) -> str:
@@ -198,8 +238,15 @@ def check(run: Path, episodes: int, averaged: bool = True) -> dict:
     nets = load_networks(run / "networks", averaged)
     env = FastEnv(spec)
     rows = scored(rollouts(env, run_policies(run), episodes), nets, env.max_steps)
-    return {"run": str(run), "task": spec.name, "algorithm": nets.kind, "setting": setting(spec),
-            "reward_members": nets.reward_members, **correlations(rows, silent_terms(env, run)), "rows": rows}
+    return {
+        "run": str(run),
+        "task": spec.name,
+        "algorithm": nets.kind,
+        "setting": setting(spec),
+        "reward_members": nets.reward_members,
+        **correlations(rows, silent_terms(env, run)),
+        "rows": rows,
+    }
 
 
 def checked(run: Path, episodes: int, averaged: bool) -> dict | None:
@@ -251,16 +298,26 @@ def check_pool(reward_runs: list[Path], pool: list[Path], episodes: int, average
             name = f"untrained-s{seed}"
             rows[name] = [r | {"policy_run": name} for r in rollouts(env, {0: untrained_policy(specs[run])}, episodes)]
         for run in track(members, description=f"{task}: rolling out the pool"):
-            rows[str(run)] = [r | {"policy_run": str(run)}
-                              for r in rollouts(env, run_policies(run, untrained=False), episodes)]
+            rows[str(run)] = [
+                r | {"policy_run": str(run)} for r in rollouts(env, run_policies(run, untrained=False), episodes)
+            ]
         for run in (r for r in reward_runs if specs[r].name == task):
             held_out = [r for name, group in rows.items() if name != str(run) for r in group]
             rows_scored = scored(held_out, nets[run], env.max_steps)
-            results.append({"run": str(run), "task": task, "algorithm": nets[run].kind, "setting": setting(specs[run]),
-                            "pool": True, "reward_members": nets[run].reward_members,
-                            **correlations(rows_scored, silent_terms(env, run),
-                                           key=lambda r: (r["policy_run"], r["policy_steps"])),
-                            "rows": rows_scored})
+            results.append(
+                {
+                    "run": str(run),
+                    "task": task,
+                    "algorithm": nets[run].kind,
+                    "setting": setting(specs[run]),
+                    "pool": True,
+                    "reward_members": nets[run].reward_members,
+                    **correlations(
+                        rows_scored, silent_terms(env, run), key=lambda r: (r["policy_run"], r["policy_steps"])
+                    ),
+                    "rows": rows_scored,
+                }
+            )
     return results
 
 
@@ -286,27 +343,35 @@ def reading(r: dict, name: str, interval: bool = True) -> str:
 
 def print_tables(results: list[dict]) -> None:
     """One row per run; then, where a task and algorithm have several runs (seeds), each reading per seed."""
-    print("| task | algorithm | runs of | seed | policies x episodes | rho: both returns discounted with the "
-          "generator's gamma (95% interval, policies resampled) | rho: both summed | rho: learned discounted, "
-          "heuristic summed | rho: learned summed to the time limit | rho of per-policy means | rho of -1 per step, "
-          "by the same three readings |")
+    print(
+        "| task | algorithm | runs of | seed | policies x episodes | rho: both returns discounted with the "
+        "generator's gamma (95% interval, policies resampled) | rho: both summed | rho: learned discounted, "
+        "heuristic summed | rho: learned summed to the time limit | rho of per-policy means | rho of -1 per step, "
+        "by the same three readings |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for r in results:
         folder = Path(r["run"]).parent.parent.name
         length = r.get("length_baseline", {})
-        baseline = ", ".join(f"{length[k]:.2f}" for k in ("spearman_discounted", "spearman_sum", "spearman")
-                             if k in length) or "-"
-        print(f"| {r['task']} | {label(r)} | {folder} | {training_seed(r)} | {r['policies']} x "
-              f"{r['rollouts'] // r['policies']} | {reading(r, 'spearman_discounted')} | {reading(r, 'spearman_sum')} "
-              f"| {reading(r, 'spearman')} | {reading(r, 'spearman_horizon')} | {r['spearman_policy_means']:.3f} | "
-              f"{baseline} |")
+        baseline = (
+            ", ".join(f"{length[k]:.2f}" for k in ("spearman_discounted", "spearman_sum", "spearman") if k in length)
+            or "-"
+        )
+        print(
+            f"| {r['task']} | {label(r)} | {folder} | {training_seed(r)} | {r['policies']} x "
+            f"{r['rollouts'] // r['policies']} | {reading(r, 'spearman_discounted')} | {reading(r, 'spearman_sum')} "
+            f"| {reading(r, 'spearman')} | {reading(r, 'spearman_horizon')} | {r['spearman_policy_means']:.3f} | "
+            f"{baseline} |"
+        )
     groups: dict[tuple, list[dict]] = {}
     for r in results:
         groups.setdefault((r["task"], label(r), r.get("setting")), []).append(r)
     if all(len(g) == 1 for g in groups.values()):
         return
-    print("\n| task | algorithm | runs of (first run's folder) | seeds | both discounted, per seed | at >= 0.8 | "
-          "both summed, per seed | at >= 0.8 | learned discounted, heuristic summed, per seed | at >= 0.8 |")
+    print(
+        "\n| task | algorithm | runs of (first run's folder) | seeds | both discounted, per seed | at >= 0.8 | "
+        "both summed, per seed | at >= 0.8 | learned discounted, heuristic summed, per seed | at >= 0.8 |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for (task, algo, _), g in groups.items():
         cells = []
@@ -330,8 +395,10 @@ def print_without_terms(results: list[dict]) -> None:
         print("|---|---|---|---|" + "---|" * len(terms))
         for r in rows:
             cells = " | ".join(f"{r['spearman_without'][t]:.3f}" if t in r["spearman_without"] else "-" for t in terms)
-            print(f"| {label(r)} | {Path(r['run']).parent.parent.name} | {training_seed(r)} | {r['spearman']:.3f} | "
-                  f"{cells} |")
+            print(
+                f"| {label(r)} | {Path(r['run']).parent.parent.name} | {training_seed(r)} | {r['spearman']:.3f} | "
+                f"{cells} |"
+            )
 
 
 def print_silent_scaled(results: list[dict]) -> None:
@@ -340,14 +407,18 @@ def print_silent_scaled(results: list[dict]) -> None:
     for task in dict.fromkeys(r["task"] for r in results):
         rows = [r for r in results if r["task"] == task]
         scales = list(rows[0]["spearman_silent_scaled"])
-        print(f"\n{task}: rho (learned discounted, heuristic summed) with the terms the demonstrations never "
-              "exercise priced at k x the spec's weight (the demonstrations' returns are the same for every k)\n")
+        print(
+            f"\n{task}: rho (learned discounted, heuristic summed) with the terms the demonstrations never "
+            "exercise priced at k x the spec's weight (the demonstrations' returns are the same for every k)\n"
+        )
         print("| algorithm | run | seed | terms | " + " | ".join(f"k = {k}" for k in scales) + " |")
         print("|---|---|---|---|" + "---|" * len(scales))
         for r in rows:
             cells = " | ".join(f"{r['spearman_silent_scaled'][k]:.3f}" for k in scales)
-            print(f"| {label(r)} | {Path(r['run']).parent.parent.name} | {training_seed(r)} | "
-                  f"{', '.join(r['silent_terms'])} | {cells} |")
+            print(
+                f"| {label(r)} | {Path(r['run']).parent.parent.name} | {training_seed(r)} | "
+                f"{', '.join(r['silent_terms'])} | {cells} |"
+            )
 
 
 def scatter_figure(shown: list[dict], out: Path) -> None:
@@ -361,20 +432,24 @@ def scatter_figure(shown: list[dict], out: Path) -> None:
     cols = min(len(shown), 3)
     rows = -(-len(shown) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.8 * rows), squeeze=False)
-    for ax in axes.flat[len(shown):]:
+    for ax in axes.flat[len(shown) :]:
         ax.set_visible(False)
     for ax, r in zip(axes.flat, shown):
         steps = np.array([x["policy_steps"] for x in r["rows"]]) / 1000
         discounted = "spearman_discounted" in r
         heuristic = "heuristic_discounted" if discounted else "heuristic"
-        sc = ax.scatter([x[heuristic] for x in r["rows"]], [x["learned"] for x in r["rows"]], c=steps, s=14,
-                        cmap="viridis")
-        rho = (f"rho {r['spearman_discounted']:.3f} (heuristic summed: {r['spearman']:.3f})" if discounted
-               else f"rho {r['spearman']:.3f}")
-        ax.set_title(f"{r['task']} {label(r)}\n{Path(r['run']).parent.parent.name}, seed {training_seed(r)}: "
-                     f"{rho}", fontsize=9)
-        ax.set(xlabel="heuristic return" + (", discounted" if discounted else ""),
-               ylabel="learned return, discounted")
+        sc = ax.scatter(
+            [x[heuristic] for x in r["rows"]], [x["learned"] for x in r["rows"]], c=steps, s=14, cmap="viridis"
+        )
+        rho = (
+            f"rho {r['spearman_discounted']:.3f} (heuristic summed: {r['spearman']:.3f})"
+            if discounted
+            else f"rho {r['spearman']:.3f}"
+        )
+        ax.set_title(
+            f"{r['task']} {label(r)}\n{Path(r['run']).parent.parent.name}, seed {training_seed(r)}: {rho}", fontsize=9
+        )
+        ax.set(xlabel="heuristic return" + (", discounted" if discounted else ""), ylabel="learned return, discounted")
         fig.colorbar(sc, ax=ax, label="policy training steps (thousands)")
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -398,14 +473,22 @@ def silent_figure(results: list[dict], out: Path) -> None:
         for r in (r for r in results if r["task"] == task):
             name = label(r)
             scan = r["spearman_silent_scaled"]
-            ax.plot([float(k) for k in scan], list(scan.values()), "o-", ms=3, color=colours[name],
-                    label=None if name in shown else name)
+            ax.plot(
+                [float(k) for k in scan],
+                list(scan.values()),
+                "o-",
+                ms=3,
+                color=colours[name],
+                label=None if name in shown else name,
+            )
             shown.add(name)
         ax.axhline(0.8, color="grey", ls="--", lw=1)
         silent = next(r["silent_terms"] for r in results if r["task"] == task)
-        ax.set(title=f"{task}: never shown {', '.join(silent)}",
-               xlabel="their price, times the spec's weight",
-               ylabel="Spearman rho")
+        ax.set(
+            title=f"{task}: never shown {', '.join(silent)}",
+            xlabel="their price, times the spec's weight",
+            ylabel="Spearman rho",
+        )
         ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out, dpi=110)
@@ -417,20 +500,39 @@ def main() -> None:
     ap.add_argument("runs", nargs="*", type=Path)
     ap.add_argument("--episodes", type=int, default=8, help="held-out seeds per policy")
     ap.add_argument("--figure", default="docs/irl_reward_check.png")
-    ap.add_argument("--from-json", nargs="*", type=Path, default=[], metavar="JSON",
-                    help="also take the results an earlier call wrote beside its figure (no rollouts)")
-    ap.add_argument("--pool", nargs="*", type=Path, metavar="RUN",
-                    help="score each run's reward on the checkpoints of these runs of its task (PPO, BC, GAIL, AIRL; "
-                         "without RUN: the runs above), leaving out its own: policies not trained against it")
-    ap.add_argument("--final", action="store_true",
-                    help="score AIRL's final r_psi alone, not its average over the copies saved during training")
-    ap.add_argument("--no-rows", action="store_true",
-                    help="write each run's figures but not its per-rollout rows into the JSON (the figure keeps them)")
+    ap.add_argument(
+        "--from-json",
+        nargs="*",
+        type=Path,
+        default=[],
+        metavar="JSON",
+        help="also take the results an earlier call wrote beside its figure (no rollouts)",
+    )
+    ap.add_argument(
+        "--pool",
+        nargs="*",
+        type=Path,
+        metavar="RUN",
+        help="score each run's reward on the checkpoints of these runs of its task (PPO, BC, GAIL, AIRL; "
+        "without RUN: the runs above), leaving out its own: policies not trained against it",
+    )
+    ap.add_argument(
+        "--final",
+        action="store_true",
+        help="score AIRL's final r_psi alone, not its average over the copies saved during training",
+    )
+    ap.add_argument(
+        "--no-rows",
+        action="store_true",
+        help="write each run's figures but not its per-rollout rows into the JSON (the figure keeps them)",
+    )
     args = ap.parse_args()
     if not args.runs and not args.from_json:
         ap.error("give run directories, or --from-json with earlier results")
-    print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"load {os.getloadavg()[0]:.1f}")
+    print(
+        f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"load {os.getloadavg()[0]:.1f}"
+    )
     results = [r for f in args.from_json for r in json.loads(f.read_text())]
     if args.pool is not None:
         results += check_pool(args.runs, args.pool or args.runs, args.episodes, not args.final)
@@ -442,8 +544,9 @@ def main() -> None:
     print_tables(results)
     print_without_terms(results)
     print_silent_scaled(results)
-    shown = list({(r["task"], label(r), r.get("setting")): r
-                  for r in reversed(results) if "rows" in r}.values())[::-1]  # the lowest seed of each setting
+    shown = list({(r["task"], label(r), r.get("setting")): r for r in reversed(results) if "rows" in r}.values())[
+        ::-1
+    ]  # the lowest seed of each setting
     if shown:
         scatter_figure(shown, Path(args.figure))
     silent_out = Path(args.figure).with_name(Path(args.figure).stem + "_silent_terms.png")

@@ -28,9 +28,17 @@ ALGOS = ["ppo", "gail", "airl", "bc"]
 
 def overrides(algo: str, seed: int, cap: int) -> list[str]:
     """The spec changes of one benchmark run."""
-    out = [f"train.timesteps={cap}", f"train.seed={seed}", "evaluate.periodic_every=50000",
-           "evaluate.periodic_episodes=10", "evaluate.stop_at_subtasks=1.0", "train.checkpoint_every=50000",
-           "train.keep_checkpoints=100", "evaluate.image_every=8", "evaluate.record_episodes=5"]
+    out = [
+        f"train.timesteps={cap}",
+        f"train.seed={seed}",
+        "evaluate.periodic_every=50000",
+        "evaluate.periodic_episodes=10",
+        "evaluate.stop_at_subtasks=1.0",
+        "train.checkpoint_every=50000",
+        "train.keep_checkpoints=100",
+        "evaluate.image_every=8",
+        "evaluate.record_episodes=5",
+    ]
     return out + ([f"irl.algorithm={algo}"] if algo != "ppo" else [])
 
 
@@ -42,8 +50,7 @@ def run(args) -> None:
         for algo in args.algos:
             t0 = time.perf_counter()
             changes = overrides(algo, args.seed, args.cap) + (args.set if algo in ("gail", "airl") else [])
-            path = start_run(Path("specs") / f"{task}.yaml", changes, args.root,
-                             progress=not args.quiet)
+            path = start_run(Path("specs") / f"{task}.yaml", changes, args.root, progress=not args.quiet)
             print(f"{task} {algo}: {path} in {time.perf_counter() - t0:.0f} s", flush=True)
 
 
@@ -66,7 +73,7 @@ def plot_mean_range(ax, curves: list[tuple[list[int], list[float]]], label: str,
     n = min(len(c[0]) for c in curves)
     steps = [0, *curves[0][0][:n]]
     subs = np.array([[0, *c[1][:n]] for c in curves])
-    line, = ax.plot(steps, subs.mean(0), label=label)
+    (line,) = ax.plot(steps, subs.mean(0), label=label)
     ax.fill_between(steps, subs.min(0), subs.max(0), color=line.get_color(), alpha=alpha)
 
 
@@ -96,15 +103,21 @@ def report(args) -> None:
     if not present:
         raise SystemExit(f"no finished runs under {args.root}")
     rows, fig = [], plt.figure(figsize=(4.4 * len(present), 3.8))
-    print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"{platform.python_version()}; root {args.root}")
-    print("| task | algorithm | steps to 90% of expert | wall time to 90% | steps trained | train time | "
-          "final success | final subtasks (expert) |")
+    print(
+        f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"{platform.python_version()}; root {args.root}"
+    )
+    print(
+        "| task | algorithm | steps to 90% of expert | wall time to 90% | steps trained | train time | "
+        "final success | final subtasks (expert) |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for k, task in enumerate(present):  # a panel per task that has runs
         ax = fig.add_subplot(1, len(present), k + 1)
-        runs = sorted((f.parent for f in (Path(args.root) / task).glob("*/eval.json")),
-                      key=lambda d: (ALGOS.index(algo_of(d)), d.name))  # same order and colours in every panel
+        runs = sorted(
+            (f.parent for f in (Path(args.root) / task).glob("*/eval.json")),
+            key=lambda d: (ALGOS.index(algo_of(d)), d.name),
+        )  # same order and colours in every panel
         for run_dir in runs:
             algo = algo_of(run_dir)
             meta = json.loads((run_dir / "meta.json").read_text())
@@ -112,25 +125,39 @@ def report(args) -> None:
             steps, subs, secs = curve(run_dir) if algo != "bc" else ([], [], [])  # BC trains offline: no curve
             expert = ev["expert"]["subtasks_completed"]
             hit = next((i for i, s in enumerate(subs) if s >= 0.9 * expert), None)
-            row = {"task": task, "algo": algo, "run": str(run_dir), "expert_subtasks": expert,
-                   "steps_to_90": steps[hit] if hit is not None else None,
-                   "seconds_to_90": secs[hit] if hit is not None else None,
-                   "steps": meta["trained_timesteps"], "train_seconds": meta["train_seconds"],
-                   "final_success": ev["agent"]["success_rate"], "final_subtasks": ev["agent"]["subtasks_completed"]}
+            row = {
+                "task": task,
+                "algo": algo,
+                "run": str(run_dir),
+                "expert_subtasks": expert,
+                "steps_to_90": steps[hit] if hit is not None else None,
+                "seconds_to_90": secs[hit] if hit is not None else None,
+                "steps": meta["trained_timesteps"],
+                "train_seconds": meta["train_seconds"],
+                "final_success": ev["agent"]["success_rate"],
+                "final_subtasks": ev["agent"]["subtasks_completed"],
+            }
             rows.append(row)
             to90 = f"{row['steps_to_90']:,}" if hit is not None else "not reached"
             if algo == "bc":  # trained offline on the demonstrations: no environment steps
                 to90 = "0 (offline)" if row["final_subtasks"] >= 0.9 * expert else "not reached"
             wall = f"{row['seconds_to_90'] / 60:.1f} min" if hit is not None else "-"
-            print(f"| {task} | {algo.upper()} | {to90} | {wall} | {row['steps']:,} | "
-                  f"{row['train_seconds'] / 60:.1f} min | {row['final_success']:.0%} | "
-                  f"{row['final_subtasks']:.1%} ({expert:.0%}) |")
+            print(
+                f"| {task} | {algo.upper()} | {to90} | {wall} | {row['steps']:,} | "
+                f"{row['train_seconds'] / 60:.1f} min | {row['final_success']:.0%} | "
+                f"{row['final_subtasks']:.1%} ({expert:.0%}) |"
+            )
             if algo == "bc":  # no training loop: its final evaluation, as a level
                 ax.axhline(row["final_subtasks"], color="black", ls="--", lw=1, label="BC (20 demos)")
             else:
                 seen = algo.upper() in ax.get_legend_handles_labels()[1]  # one legend entry per algorithm
-                ax.plot([0, *steps], [0, *subs], marker=".", label=None if seen else algo.upper(),
-                        color=f"C{ALGOS.index(algo)}")
+                ax.plot(
+                    [0, *steps],
+                    [0, *subs],
+                    marker=".",
+                    label=None if seen else algo.upper(),
+                    color=f"C{ALGOS.index(algo)}",
+                )
         ax.axhline(0.9, color="grey", ls=":", lw=1)
         ax.set(title=task, xlabel="environment steps", ylabel="subtasks completed (10 eval seeds)", ylim=(-0.02, 1.02))
         ax.xaxis.set_major_formatter(lambda x, _: f"{x / 1e6:g}M" if x >= 1e6 else f"{x / 1e3:g}k" if x else "0")
@@ -152,11 +179,19 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--cap", type=int, default=3_000_000, help="step budget per run")
     ap.add_argument("--root", default="runs/bench-irl")
-    ap.add_argument("--figure", help="default: docs/irl_fig4.png for the default root, else ROOT/fig4.png (so a "
-                    "report on a probe's root leaves the published figure alone)")
+    ap.add_argument(
+        "--figure",
+        help="default: docs/irl_fig4.png for the default root, else ROOT/fig4.png (so a "
+        "report on a probe's root leaves the published figure alone)",
+    )
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
-    ap.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
-                    help="spec overrides for the GAIL and AIRL runs, e.g. irl.discriminator.history=200000")
+    ap.add_argument(
+        "--set",
+        nargs="*",
+        default=[],
+        metavar="KEY=VALUE",
+        help="spec overrides for the GAIL and AIRL runs, e.g. irl.discriminator.history=200000",
+    )
     args = ap.parse_args()
     if args.figure is None:
         default_root = Path(args.root) == Path(ap.get_default("root"))

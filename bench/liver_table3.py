@@ -51,8 +51,12 @@ def summary(results: list[dict]) -> dict:
         for cell in CELLS:
             rho = np.array([r["table3"][algo][cell]["rho"] for r in results], float)
             p = max(r["table3"][algo][cell]["p"] for r in results)
-            out[f"{algo}/{cell}"] = {"mean": float(rho.mean()), "sd": float(rho.std()), "max_p": float(p),
-                                     "per_seed": rho.tolist()}
+            out[f"{algo}/{cell}"] = {
+                "mean": float(rho.mean()),
+                "sd": float(rho.std()),
+                "max_p": float(p),
+                "per_seed": rho.tolist(),
+            }
     return out
 
 
@@ -73,17 +77,30 @@ def main() -> None:
     for algo in ("gail", "airl"):
         cells = [table.get(f"{algo}/{c}") for c in CELLS]
         if all(cells):
-            print(f"| {algo.upper()} | " + " | ".join(f"{c['mean']:.2f} ± {c['sd']:.2f} ({c['max_p']:.0e})"
-                                                     for c in cells) + " |")
+            print(
+                f"| {algo.upper()} | "
+                + " | ".join(f"{c['mean']:.2f} ± {c['sd']:.2f} ({c['max_p']:.0e})" for c in cells)
+                + " |"
+            )
     h = results[0]["table3"]["heuristic"]
     print(f"heuristic return: economy {h['heuristic-economy']['rho']:.2f}, safety {h['heuristic-safety']['rho']:.2f}")
     timed = [t for t in seconds if t > 0]
     if timed:
         print(f"wall time per seed: {np.mean(timed) / 60:.1f} min (whole experiment: cohort, 2 trainings, scoring)")
     out = Path(f"docs/liver_table3_{args.timesteps or 'default'}.json")
-    out.write_text(json.dumps({"seeds": args.seeds, "timesteps": args.timesteps, "machine": machine,
-                               "seconds": seconds, "table3": table,
-                               "heuristic": results[0]["table3"]["heuristic"]}, indent=2))
+    out.write_text(
+        json.dumps(
+            {
+                "seeds": args.seeds,
+                "timesteps": args.timesteps,
+                "machine": machine,
+                "seconds": seconds,
+                "table3": table,
+                "heuristic": results[0]["table3"]["heuristic"],
+            },
+            indent=2,
+        )
+    )
     print(f"written {out}")
 
 

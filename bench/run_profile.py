@@ -73,8 +73,15 @@ def instrument() -> None:
     FreshInfoVecEnv.step_wait = vec_step(FreshInfoVecEnv.step_wait)
     FastEnv.step = timed("eval: env stepping", FastEnv.step, skip_inside_vec=True)
     FastEnv.render_views = timed("eval: endoscope rendering", FastEnv.render_views)
-    for name in ("log_scene", "log_episode", "log_training", "log_training_columns", "log_summary",
-                 "send_blueprint", "close"):
+    for name in (
+        "log_scene",
+        "log_episode",
+        "log_training",
+        "log_training_columns",
+        "log_summary",
+        "send_blueprint",
+        "close",
+    ):
         setattr(RunRecorder, name, timed(f"logging: {name}", getattr(RunRecorder, name)))
 
 
@@ -89,29 +96,36 @@ def main() -> None:
     instrument()
     with tempfile.TemporaryDirectory() as root:
         t0 = time.perf_counter()
-        run = start_run(args.spec, [f"train.timesteps={args.timesteps}", f"evaluate.episodes={args.episodes}"],
-                        root, progress=False)
+        run = start_run(
+            args.spec, [f"train.timesteps={args.timesteps}", f"evaluate.episodes={args.episodes}"], root, progress=False
+        )
         wall = time.perf_counter() - t0
         meta = json.loads((run / "meta.json").read_text())
     train = meta["train_seconds"]
     logging = sum(v for k, v in TIMERS.items() if k.startswith("logging"))
     rows = dict(TIMERS)
-    rows["train: learner and callbacks (rest of training)"] = train - TIMERS["train: env stepping (vec env)"] - \
-        TIMERS["logging: log_training"]
-    print(f"fastrl run profile  {platform.processor() or platform.machine()}  {os.cpu_count()} cpus  "
-          f"python {platform.python_version()}")
+    rows["train: learner and callbacks (rest of training)"] = (
+        train - TIMERS["train: env stepping (vec env)"] - TIMERS["logging: log_training"]
+    )
+    print(
+        f"fastrl run profile  {platform.processor() or platform.machine()}  {os.cpu_count()} cpus  "
+        f"python {platform.python_version()}"
+    )
     print(f"spec {args.spec}  timesteps {meta['trained_timesteps']}  eval episodes {args.episodes}")
     print(f"wall {wall:.1f} s  (training {train:.1f} s, {meta['trained_timesteps'] / train:.0f} steps/s)\n")
     print(f"{'part':52s} {'seconds':>9s} {'share':>7s} {'calls':>8s}")
     for name, sec in sorted(rows.items(), key=lambda kv: -kv[1]):
         print(f"{name:52s} {sec:9.2f} {sec / wall:7.1%} {CALLS.get(name, 0):8d}")
-    print(f"\n{'env stepping (training + evaluation)':52s} "
-          f"{TIMERS['train: env stepping (vec env)'] + TIMERS['eval: env stepping']:9.2f} "
-          f"{(TIMERS['train: env stepping (vec env)'] + TIMERS['eval: env stepping']) / wall:7.1%}")
+    print(
+        f"\n{'env stepping (training + evaluation)':52s} "
+        f"{TIMERS['train: env stepping (vec env)'] + TIMERS['eval: env stepping']:9.2f} "
+        f"{(TIMERS['train: env stepping (vec env)'] + TIMERS['eval: env stepping']) / wall:7.1%}"
+    )
     print(f"{'Rerun logging (all calls)':52s} {logging:9.2f} {logging / wall:7.1%}")
     if args.json:
-        args.json.write_text(json.dumps({"wall": wall, "train_seconds": train, "parts": rows,
-                                         "logging": logging}, indent=2))
+        args.json.write_text(
+            json.dumps({"wall": wall, "train_seconds": train, "parts": rows, "logging": logging}, indent=2)
+        )
 
 
 if __name__ == "__main__":

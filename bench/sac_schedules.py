@@ -29,24 +29,43 @@ from irl_tasks import curve, plot_mean_range, save_figure
 
 SCHEDULES = {
     # name: (what differs from the reference, spec overrides)
-    "sb3": ("stable-baselines3 SAC: 1 env, 1 update / step, [256, 256]",
-            ["train.sac.lean_update=false"]),
+    "sb3": ("stable-baselines3 SAC: 1 env, 1 update / step, [256, 256]", ["train.sac.lean_update=false"]),
     "lean": ("same schedule, fastrl's lean update", []),
     "lean-128": ("lean, [128, 128]", ["train.sac.net_arch=[128, 128]"]),
     "lean-128-b128": ("lean, [128, 128], batch 128", ["train.sac.net_arch=[128, 128]", "train.sac.batch_size=128"]),
-    "lean-128-half": ("lean, [128, 128], 1 update / 2 steps",
-                      ["train.sac.net_arch=[128, 128]", "train.sac.train_freq=2"]),
-    "lean-128-4env-half": ("lean, [128, 128], 4 envs, 2 updates / 4 steps",
-                           ["train.sac.net_arch=[128, 128]", "train.n_envs=4", "train.sac.gradient_steps=2"]),
-    "lean-128-4env-quarter": ("lean, [128, 128], 4 envs, 1 update / 4 steps",
-                              ["train.sac.net_arch=[128, 128]", "train.n_envs=4", "train.sac.gradient_steps=1"]),
-    "lean-128-4env-quarter-lr1e-3": ("the same, learning rate 1e-3",
-                                     ["train.sac.net_arch=[128, 128]", "train.n_envs=4", "train.sac.gradient_steps=1",
-                                      "train.sac.learning_rate=1e-3"]),
+    "lean-128-half": (
+        "lean, [128, 128], 1 update / 2 steps",
+        ["train.sac.net_arch=[128, 128]", "train.sac.train_freq=2"],
+    ),
+    "lean-128-4env-half": (
+        "lean, [128, 128], 4 envs, 2 updates / 4 steps",
+        ["train.sac.net_arch=[128, 128]", "train.n_envs=4", "train.sac.gradient_steps=2"],
+    ),
+    "lean-128-4env-quarter": (
+        "lean, [128, 128], 4 envs, 1 update / 4 steps",
+        ["train.sac.net_arch=[128, 128]", "train.n_envs=4", "train.sac.gradient_steps=1"],
+    ),
+    "lean-128-4env-quarter-lr1e-3": (
+        "the same, learning rate 1e-3",
+        [
+            "train.sac.net_arch=[128, 128]",
+            "train.n_envs=4",
+            "train.sac.gradient_steps=1",
+            "train.sac.learning_rate=1e-3",
+        ],
+    ),
 }
-BASE = ["actions.mode=rates", "train.algo=SAC", "train.n_envs=1", "train.sac.net_arch=[256, 256]",
-        "train.sac.batch_size=256", "evaluate.periodic_episodes=10",
-        "train.checkpoint_every=25000", "evaluate.record_episodes=3", "evaluate.image_every=0"]
+BASE = [
+    "actions.mode=rates",
+    "train.algo=SAC",
+    "train.n_envs=1",
+    "train.sac.net_arch=[256, 256]",
+    "train.sac.batch_size=256",
+    "evaluate.periodic_episodes=10",
+    "train.checkpoint_every=25000",
+    "evaluate.record_episodes=3",
+    "evaluate.image_every=0",
+]
 
 
 def run(args) -> None:
@@ -55,8 +74,13 @@ def run(args) -> None:
 
     for seed in args.seeds:
         for name in args.schedules:
-            sets = [*BASE, *SCHEDULES[name][1], f"train.seed={seed}", f"train.timesteps={args.steps}",
-                    f"evaluate.periodic_every={args.eval_every}"]
+            sets = [
+                *BASE,
+                *SCHEDULES[name][1],
+                f"train.seed={seed}",
+                f"train.timesteps={args.steps}",
+                f"evaluate.periodic_every={args.eval_every}",
+            ]
             t0 = time.perf_counter()
             path = start_run("specs/tracelines.yaml", sets, Path(args.root) / name, progress=not args.quiet)
             print(f"{name} seed {seed}: {path} in {time.perf_counter() - t0:.0f} s", flush=True)
@@ -67,10 +91,15 @@ def summarise(run_dir: Path) -> dict:
     ev = json.loads((run_dir / "eval.json").read_text())
     meta = json.loads((run_dir / "meta.json").read_text())
     steps, subs, _ = curve(run_dir)
-    return {"run": str(run_dir), "final_subtasks": ev["agent"]["subtasks_completed"],
-            "final_success": ev["agent"]["success_rate"], "expert_subtasks": ev["expert"]["subtasks_completed"],
-            "train_fps": meta["train_fps"], "train_minutes": meta["timesteps"] / meta["train_fps"] / 60,
-            "curve": {"steps": steps, "subtasks": subs}}
+    return {
+        "run": str(run_dir),
+        "final_subtasks": ev["agent"]["subtasks_completed"],
+        "final_success": ev["agent"]["success_rate"],
+        "expert_subtasks": ev["expert"]["subtasks_completed"],
+        "train_fps": meta["train_fps"],
+        "train_minutes": meta["timesteps"] / meta["train_fps"] / 60,
+        "curve": {"steps": steps, "subtasks": subs},
+    }
 
 
 def report(args) -> None:
@@ -81,8 +110,9 @@ def report(args) -> None:
     import matplotlib.pyplot as plt
 
     print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; root {args.root}")
-    print("| schedule | what | seeds | final subtasks | final success | train steps/s | train wall time | "
-          "speed vs sb3 |")
+    print(
+        "| schedule | what | seeds | final subtasks | final success | train steps/s | train wall time | speed vs sb3 |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     fig, ax = plt.subplots(figsize=(7, 4.2))
     rows, ref_fps = {}, None
@@ -95,13 +125,23 @@ def report(args) -> None:
         ref_fps = fps if name == "sb3" else ref_fps
         finals = [r["final_subtasks"] for r in runs]
         speed = f"{fps / ref_fps:.1f}x" if ref_fps else "-"
-        print(f"| {name} | {what} | {len(runs)} | {np.mean(finals):.1%} ± {np.std(finals):.1%} | "
-              f"{np.mean([r['final_success'] for r in runs]):.0%} | {fps:.0f} | "
-              f"{np.mean([r['train_minutes'] for r in runs]):.1f} min | {speed} |")
-        plot_mean_range(ax, [(r["curve"]["steps"], r["curve"]["subtasks"]) for r in runs],
-                        f"{name} (n={len(runs)}, {fps:.0f} steps/s)", alpha=0.12)
-    ax.set(title="SAC on TraceLines (rates): update schedules, mean and range over seeds",
-           xlabel="environment steps", ylabel="subtasks completed (10 eval seeds)", ylim=(-0.02, 1.02))
+        print(
+            f"| {name} | {what} | {len(runs)} | {np.mean(finals):.1%} ± {np.std(finals):.1%} | "
+            f"{np.mean([r['final_success'] for r in runs]):.0%} | {fps:.0f} | "
+            f"{np.mean([r['train_minutes'] for r in runs]):.1f} min | {speed} |"
+        )
+        plot_mean_range(
+            ax,
+            [(r["curve"]["steps"], r["curve"]["subtasks"]) for r in runs],
+            f"{name} (n={len(runs)}, {fps:.0f} steps/s)",
+            alpha=0.12,
+        )
+    ax.set(
+        title="SAC on TraceLines (rates): update schedules, mean and range over seeds",
+        xlabel="environment steps",
+        ylabel="subtasks completed (10 eval seeds)",
+        ylim=(-0.02, 1.02),
+    )
     ax.legend(fontsize=8)
     fig.tight_layout()
     save_figure(fig, args.figure, rows)

@@ -45,9 +45,17 @@ def build(name: str, demos):
     from fastrl.spec import load_spec
 
     n_envs, freq, grad, batch, net, lean, with_disc = SCHEDULES[name]
-    sets = ["actions.mode=rates", "train.algo=SAC", f"train.n_envs={n_envs}", f"train.sac.train_freq={freq}",
-            f"train.sac.gradient_steps={grad}", f"train.sac.batch_size={batch}", f"train.sac.net_arch={net}",
-            "train.sac.learning_starts=1000", f"train.sac.lean_update={str(lean).lower()}"]
+    sets = [
+        "actions.mode=rates",
+        "train.algo=SAC",
+        f"train.n_envs={n_envs}",
+        f"train.sac.train_freq={freq}",
+        f"train.sac.gradient_steps={grad}",
+        f"train.sac.batch_size={batch}",
+        f"train.sac.net_arch={net}",
+        "train.sac.learning_starts=1000",
+        f"train.sac.lean_update={str(lean).lower()}",
+    ]
     sets += ["irl.algorithm=airl"] if with_disc else []
     spec = load_spec("specs/tracelines.yaml", sets)
     venv = make_vec_env(spec, n_envs, 0)
@@ -77,8 +85,10 @@ def main() -> None:
             cache["t"] = expert_transitions(FastEnv(spec), expert_trajectories(FastEnv(spec), range(20)))
         return cache["t"]
 
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
-          f"torch {torch.__version__} (models on 1 thread)")
+    print(
+        f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
+        f"torch {torch.__version__} (models on 1 thread)"
+    )
     print("| schedule | envs | steps/update | batch | net | lean | steps/s | ms per update | vs plain SB3 SAC |")
     print("|---|---|---|---|---|---|---|---|---|")
     ref = None
@@ -95,8 +105,11 @@ def main() -> None:
         updates_per_step = grad / (freq * n_envs)
         ms = 1e3 / best / updates_per_step
         ref = best if ref is None else ref
-        print(f"| {name} | {n_envs} | {1 / updates_per_step:g} | {batch} | {net} | {'yes' if lean else 'no'} | "
-              f"{best:,.0f} | {ms:.1f} | {best / ref:.1f}x |", flush=True)
+        print(
+            f"| {name} | {n_envs} | {1 / updates_per_step:g} | {batch} | {net} | {'yes' if lean else 'no'} | "
+            f"{best:,.0f} | {ms:.1f} | {best / ref:.1f}x |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

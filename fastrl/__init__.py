@@ -13,8 +13,12 @@ import gymnasium  # noqa: E402
 __version__ = "0.1.0"
 
 SPECS_DIR = Path(__file__).resolve().parent.parent / "specs"
-TASK_IDS = {"ImageCentring": "imagecentring", "Periscoping": "periscoping", "TraceLines": "tracelines",
-            "LiverTour": "liver_tour"}
+TASK_IDS = {
+    "ImageCentring": "imagecentring",
+    "Periscoping": "periscoping",
+    "TraceLines": "tracelines",
+    "LiverTour": "liver_tour",
+}
 
 
 def spec_path(name: str) -> Path:
@@ -25,8 +29,9 @@ def spec_path(name: str) -> Path:
     return path
 
 
-def make(spec, *, render_mode: str | None = None, width: int = 128, height: int = 128,
-         overrides: list[str] = (), **sections):
+def make(
+    spec, *, render_mode: str | None = None, width: int = 128, height: int = 128, overrides: list[str] = (), **sections
+):
     """Build a FastEnv from a spec path, bundled spec name or TaskSpec; sections override spec fields."""
     from .env import FastEnv
     from .spec import TaskSpec, apply_overrides, load_spec

@@ -155,8 +155,21 @@ def test_report_groups_by_level_and_ranks_levels(scorer):
 @pytest.fixture(scope="module")
 def airl_run(tmp_path_factory):
     runs = tmp_path_factory.mktemp("runs")
-    res = CliRunner().invoke(app, ["irl", str(spec_file("tracelines")), "--algorithm", "airl", "--timesteps", "256",
-                                   *sets(), "--runs", str(runs), "--no-progress"])
+    res = CliRunner().invoke(
+        app,
+        [
+            "irl",
+            str(spec_file("tracelines")),
+            "--algorithm",
+            "airl",
+            "--timesteps",
+            "256",
+            *sets(),
+            "--runs",
+            str(runs),
+            "--no-progress",
+        ],
+    )
     assert res.exit_code == 0, res.output
     return only_run(runs)
 
@@ -169,8 +182,10 @@ def test_fastrl_score_with_a_run_writes_json_csv_figures_and_a_valid_recording(a
             degraded(scorer, s, noise, level).save(tmp_path / "in" / f"L{level}_{s}.npz")
     (tmp_path / "in" / "broken.npz").write_bytes(b"\x00" * 10)
     out = tmp_path / "out" / "scores.json"
-    res = CliRunner().invoke(app, ["score", "--run", str(airl_run), str(tmp_path / "in"), "-o", str(out),
-                                   "--references", "1", "--no-progress"])
+    res = CliRunner().invoke(
+        app,
+        ["score", "--run", str(airl_run), str(tmp_path / "in"), "-o", str(out), "--references", "1", "--no-progress"],
+    )
     assert res.exit_code == 0, res.output
     assert "broken.npz" in res.output and "scored 4 trajectories" in res.output
     report = json.loads(out.read_text())
@@ -196,6 +211,18 @@ def test_fastrl_score_with_a_run_writes_json_csv_figures_and_a_valid_recording(a
 def test_fastrl_score_needs_a_run_or_a_spec(tmp_path):
     res = CliRunner().invoke(app, ["score", str(tmp_path)])
     assert res.exit_code == 2 and "--run RUN_DIR, or --spec SPEC" in res.output
-    res = CliRunner().invoke(app, ["score", "--spec", str(spec_file("tracelines")), str(tmp_path / "none.npz"),
-                                   "-o", str(tmp_path / "s.json"), "--no-progress", "--references", "1"])
+    res = CliRunner().invoke(
+        app,
+        [
+            "score",
+            "--spec",
+            str(spec_file("tracelines")),
+            str(tmp_path / "none.npz"),
+            "-o",
+            str(tmp_path / "s.json"),
+            "--no-progress",
+            "--references",
+            "1",
+        ],
+    )
     assert res.exit_code == 2 and "no trajectory could be scored" in res.output

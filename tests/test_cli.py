@@ -47,8 +47,7 @@ def test_check_good_specs():
     assert result.exit_code == 0, result.output
     lines = result.stdout.splitlines()
     assert lines == [
-        f"ok  {p}  ({load_spec(p).task.kind}, {len(compile_task(load_spec(p)).targets)} subtasks, "
-        f"discrete)"
+        f"ok  {p}  ({load_spec(p).task.kind}, {len(compile_task(load_spec(p)).targets)} subtasks, discrete)"
         for p in GOOD
     ]
     assert "trace_lines, 13 subtasks" in lines[2]
@@ -130,8 +129,7 @@ def test_check_compile_error(monkeypatch):
     result = invoke("check", GOOD[0])
     assert result.exit_code == 2
     assert result.stderr.strip() == (
-        f"{GOOD[0]}: MuJoCo cannot compile the model: Error: mesh 'dome' not found "
-        "Element name 'x', id 3"
+        f"{GOOD[0]}: MuJoCo cannot compile the model: Error: mesh 'dome' not found Element name 'x', id 3"
     )
 
 
@@ -189,6 +187,4 @@ def test_console_script(tmp_path):
     assert proc.returncode == 2
     assert proc.stdout.startswith(f"ok  {GOOD[1]}  (periscoping, 5 subtasks, discrete)")
     assert proc.stderr.startswith(f"{bad}:6: expected ',' or ']'")
-    assert (
-        "Traceback" not in proc.stderr and "\x1b[" not in proc.stdout
-    )  # no colour codes in a pipe
+    assert "Traceback" not in proc.stderr and "\x1b[" not in proc.stdout  # no colour codes in a pipe

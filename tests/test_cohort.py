@@ -18,9 +18,15 @@ from .conftest import spec_file
 
 SEEDS = (0, 1, 2, 3)
 # The first two avatars of ImageCentring with a time limit that binds for a slowed trainee.
-SHORT = {"task": {"avatars": [{"surface": "plate", "at": [0.0, 0.0], "heading_deg": 90},
-                              {"surface": "plate", "at": [-0.05, 0.04], "heading_deg": 45}]},
-         "episode": {"time_limit": 9.0}}
+SHORT = {
+    "task": {
+        "avatars": [
+            {"surface": "plate", "at": [0.0, 0.0], "heading_deg": 90},
+            {"surface": "plate", "at": [-0.05, 0.04], "heading_deg": 45},
+        ]
+    },
+    "episode": {"time_limit": 9.0},
+}
 
 
 @pytest.fixture(scope="module")
@@ -53,8 +59,15 @@ def mean_return(env, profile: SkillProfile) -> float:
 
 # Each parameter alone at a moderate and a strong value; the gaps are wide enough that the mean return over
 # SEEDS falls by several points at each (optics: about 2 points, on the full Periscoping task).
-STRENGTHS = {"motor_noise": (0.3, 0.6), "tremor": (0.5, 1.0), "delay": (0.15, 0.35), "overshoot": (6.0, 15.0),
-             "hesitation": (0.1, 0.25), "wander": (0.4, 0.9), "optics": (0.5, 1.0)}
+STRENGTHS = {
+    "motor_noise": (0.3, 0.6),
+    "tremor": (0.5, 1.0),
+    "delay": (0.15, 0.35),
+    "overshoot": (6.0, 15.0),
+    "hesitation": (0.1, 0.25),
+    "wander": (0.4, 0.9),
+    "optics": (0.5, 1.0),
+}
 
 
 def test_strengths_cover_every_parameter():
@@ -106,8 +119,10 @@ def test_meta_carries_level_subject_and_profile(short_env):
 
 def test_replayed_return_rises_with_level(short_env):
     spec = short_env.unwrapped.task_spec
-    rows = [{"skill": t.meta["skill"], **replayed_figures(short_env, t)}
-            for t in make_cohort(spec, 3, 3, seed=0, env=short_env)]
+    rows = [
+        {"skill": t.meta["skill"], **replayed_figures(short_env, t)}
+        for t in make_cohort(spec, 3, 3, seed=0, env=short_env)
+    ]
     means = [e["return"] for e in level_table(rows)]
     assert means[0] < means[1] < means[2], means
 
@@ -128,9 +143,24 @@ def test_profiles_grow_from_expert_to_novice():
 
 def test_cli_writes_one_loadable_file_per_subject(tmp_path):
     out = tmp_path / "cohort"
-    result = CliRunner().invoke(app, ["cohort", str(spec_file("tracelines")), "--levels", "2", "--per-level", "2",
-                                      "-o", str(out), "--seed", "3", "--set", "episode.time_limit=4",
-                                      "--no-progress"])
+    result = CliRunner().invoke(
+        app,
+        [
+            "cohort",
+            str(spec_file("tracelines")),
+            "--levels",
+            "2",
+            "--per-level",
+            "2",
+            "-o",
+            str(out),
+            "--seed",
+            "3",
+            "--set",
+            "episode.time_limit=4",
+            "--no-progress",
+        ],
+    )
     assert result.exit_code == 0, result.output
     files = sorted(out.glob("*.npz"))
     assert [f.name for f in files] == ["L1-S01.npz", "L1-S02.npz", "L2-S01.npz", "L2-S02.npz"]

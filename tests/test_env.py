@@ -12,8 +12,11 @@ from fastrl.model.kinematics import Kinematics, solve_view
 
 from .conftest import spec_file
 
-IDS = {"imagecentring": "fastrl/ImageCentring-v0", "periscoping": "fastrl/Periscoping-v0",
-       "tracelines": "fastrl/TraceLines-v0"}
+IDS = {
+    "imagecentring": "fastrl/ImageCentring-v0",
+    "periscoping": "fastrl/Periscoping-v0",
+    "tracelines": "fastrl/TraceLines-v0",
+}
 
 
 @pytest.mark.parametrize("mode", ["discrete", "continuous", "rates"])
@@ -267,8 +270,10 @@ def test_rays_see_the_avatar_at_the_solved_view_and_not_when_looking_away():
     assert info["features"]["rays"] == 0.0
 
 
-@pytest.mark.parametrize(("algo", "setting", "expected"), [
-    ("PPO", None, True), ("SAC", None, False), ("SAC", True, True), ("PPO", False, False)])
+@pytest.mark.parametrize(
+    ("algo", "setting", "expected"),
+    [("PPO", None, True), ("SAC", None, False), ("SAC", True, True), ("PPO", False, False)],
+)
 def test_reward_normalisation_defaults_on_for_ppo_and_off_for_sac(algo, setting, expected):
     from fastrl.agents.sb3 import make_vec_env
     from fastrl.spec import load_spec

@@ -17,8 +17,14 @@ from fastrl.spec import load_spec
 
 from .conftest import spec_file
 
-TINY = ["train.normalize.reward=false", "train.n_envs=2", "train.ppo.n_steps=64", "train.ppo.batch_size=64",
-        "train.ppo.n_epochs=1", "episode.time_limit=8"]
+TINY = [
+    "train.normalize.reward=false",
+    "train.n_envs=2",
+    "train.ppo.n_steps=64",
+    "train.ppo.batch_size=64",
+    "train.ppo.n_epochs=1",
+    "episode.time_limit=8",
+]
 
 
 @pytest.fixture(scope="module")
@@ -199,8 +205,10 @@ def test_airl_reward_inputs_leave_columns_out_of_r_psi_but_not_of_h():
 def test_reward_ignore_narrows_the_discriminator_inputs_for_r_psi():
     airl = load_spec(spec_file("tracelines"), ["irl.algorithm=airl", "irl.discriminator.reward_ignore=[elapsed]"])
     assert airl.discriminator_inputs() is None and airl.reward_inputs() == list(range(38))
-    both = load_spec(spec_file("tracelines"), ["irl.algorithm=airl", "irl.discriminator.ignore=[contact]",
-                                               "irl.discriminator.reward_ignore=[elapsed]"])
+    both = load_spec(
+        spec_file("tracelines"),
+        ["irl.algorithm=airl", "irl.discriminator.ignore=[contact]", "irl.discriminator.reward_ignore=[elapsed]"],
+    )
     assert both.discriminator_inputs() == [*range(37), 38] and both.reward_inputs() == list(range(37))
     plain = load_spec(spec_file("tracelines"), ["irl.algorithm=airl", "irl.discriminator.reward_ignore=[]"])
     assert plain.reward_inputs() is None
@@ -211,10 +219,16 @@ def test_gail_ignores_the_clock_by_default_and_airl_sees_it():
     terms = gail.observation.terms()
     assert terms[-1] == "elapsed" and gail.discriminator_inputs() == list(range(38))  # 39 columns, the last one
     assert load_spec(spec_file("imagecentring"), ["irl.algorithm=airl"]).discriminator_inputs() is None
-    assert load_spec(spec_file("imagecentring"), ["irl.algorithm=gail", "irl.discriminator.ignore=[]"]
-                     ).discriminator_inputs() is None
-    stacked = load_spec(spec_file("imagecentring"), ["irl.algorithm=airl", "observation.stack=2",
-                                                     "irl.discriminator.ignore=[contact, elapsed]"])
+    assert (
+        load_spec(
+            spec_file("imagecentring"), ["irl.algorithm=gail", "irl.discriminator.ignore=[]"]
+        ).discriminator_inputs()
+        is None
+    )
+    stacked = load_spec(
+        spec_file("imagecentring"),
+        ["irl.algorithm=airl", "observation.stack=2", "irl.discriminator.ignore=[contact, elapsed]"],
+    )
     assert stacked.discriminator_inputs() == [*range(37), *range(39, 76)]
 
 
@@ -245,8 +259,8 @@ def test_noiseless_ranking_rollouts_are_the_experts_and_end_in_the_absorbing_sta
     assert ended and np.allclose(obs[:-1], expert_obs, atol=1e-5)
     ranked = RankedRollouts(env, [0.0, 1.0], 1, seed=7)
     s = ranked.states(lambda o: o)
-    assert torch.equal(s[0, len(obs):, -1], torch.ones(s.shape[1] - len(obs)))  # absorbed after the task is done
-    assert torch.equal(s[0, len(obs):, :-1], torch.zeros(s.shape[1] - len(obs), s.shape[2] - 1))
+    assert torch.equal(s[0, len(obs) :, -1], torch.ones(s.shape[1] - len(obs)))  # absorbed after the task is done
+    assert torch.equal(s[0, len(obs) :, :-1], torch.zeros(s.shape[1] - len(obs), s.shape[2] - 1))
     assert not ranked.absorbed[1].any()  # random actions do not finish TraceLines
 
 

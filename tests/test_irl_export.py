@@ -18,8 +18,13 @@ from fastrl.spec import load_spec
 from .conftest import spec_file
 
 PPO_TINY = ["train.n_envs=2", "train.ppo.n_steps=16", "train.ppo.batch_size=32"]
-SAC_TINY = ["actions.mode=continuous", "train.algo=SAC", "train.n_envs=2", "train.sac.learning_starts=50",
-            "train.sac.batch_size=32"]
+SAC_TINY = [
+    "actions.mode=continuous",
+    "train.algo=SAC",
+    "train.n_envs=2",
+    "train.sac.learning_starts=50",
+    "train.sac.batch_size=32",
+]
 GAMMA = 0.9
 FILES = {"policy.pt", "policy.json", "value.pt", "value.json", "reward.pt", "reward.json"}
 
@@ -59,12 +64,22 @@ def sac_run():
     return trained(SAC_TINY)
 
 
-def spectral_disc(obs_dim: int, kind: str, absorbing: bool = True, shaped: bool = True, inputs=None,
-                  reward_inputs=None, seed: int = 1) -> Discriminator:
+def spectral_disc(
+    obs_dim: int, kind: str, absorbing: bool = True, shaped: bool = True, inputs=None, reward_inputs=None, seed: int = 1
+) -> Discriminator:
     """A spectrally normalised discriminator after a few training steps (weights and power iterates moved)."""
     torch.manual_seed(seed)
-    disc = Discriminator(obs_dim, kind, GAMMA, hidden=(16, 16), spectral=True, absorbing=absorbing, shaped=shaped,
-                         inputs=inputs, reward_inputs=reward_inputs)
+    disc = Discriminator(
+        obs_dim,
+        kind,
+        GAMMA,
+        hidden=(16, 16),
+        spectral=True,
+        absorbing=absorbing,
+        shaped=shaped,
+        inputs=inputs,
+        reward_inputs=reward_inputs,
+    )
     opt = torch.optim.Adam(disc.parameters(), lr=1e-2)
     for _ in range(5):
         a = absorbing_states(4, obs_dim)  # absorbing rows train the absorbing constants away from 0
@@ -148,8 +163,9 @@ def test_a_saved_reward_keeps_the_columns_r_psi_and_h_saw(ppo_run, tmp_path):
         np.testing.assert_allclose(nets.potential(obs), disc.potential(s).numpy(), atol=1e-5)
     moved = obs.copy()
     moved[:, -1] += 1.0  # seen by h only
-    assert np.allclose(nets.reward(moved), nets.reward(obs)) and not np.allclose(nets.potential(moved),
-                                                                                 nets.potential(obs))
+    assert np.allclose(nets.reward(moved), nets.reward(obs)) and not np.allclose(
+        nets.potential(moved), nets.potential(obs)
+    )
 
 
 @pytest.mark.parametrize("kind", ["gail", "airl"])
@@ -183,10 +199,10 @@ def test_learned_return_adds_the_absorbing_value_only_when_terminated(ppo_run, t
     truncated = nets.learned_return(obs, terminated=False)
     assert truncated == pytest.approx(float(np.sum(GAMMA ** np.arange(big_t) * r)), rel=1e-9, abs=1e-9)
     terminated = nets.learned_return(obs, terminated=True)
-    assert terminated - truncated == pytest.approx(GAMMA ** big_t * r_abs / (1 - GAMMA), rel=1e-5, abs=1e-6)
+    assert terminated - truncated == pytest.approx(GAMMA**big_t * r_abs / (1 - GAMMA), rel=1e-5, abs=1e-6)
     short = obs[:4]  # a short episode: the absorbing value weighs more
     diff = nets.learned_return(short, True, gamma=0.5) - nets.learned_return(short, False, gamma=0.5)
-    assert diff == pytest.approx(0.5 ** 3 * r_abs / 0.5, rel=1e-5)
+    assert diff == pytest.approx(0.5**3 * r_abs / 0.5, rel=1e-5)
 
 
 def test_an_averaged_reward_is_the_mean_of_its_members_each_under_its_own_normalisation(ppo_run, tmp_path):
@@ -269,16 +285,31 @@ CORRUPTIONS = {
     "truncated .pt, matching hash": (_truncate_and_rehash, ValueError, "policy.pt.*weights_only"),
     "pickled code": (_pickled_code, ValueError, "value.pt.*weights_only"),
     "missing obs_norm": (lambda d: _edit_json(d, "reward", lambda m: m.pop("obs_norm")), ValueError, "reward.json"),
-    "missing absorbing value": (lambda d: _edit_json(d, "reward", lambda m: m.pop("absorbing_value")), ValueError,
-                                "reward.json.*absorbing_value"),
-    "missing layer width": (lambda d: _edit_json(d, "policy", lambda m: m["parts"]["pi"][0].pop("in")), ValueError,
-                            "policy.json"),
-    "wrong layer width": (lambda d: _edit_json(d, "value", lambda m: m["parts"]["v"][0].update({"in": 3})),
-                          ValueError, "value.json"),
-    "unknown output": (lambda d: _edit_json(d, "policy", lambda m: m.update({"output": "sample"})), ValueError,
-                       "policy.json"),
-    "bad reward columns": (lambda d: _edit_json(d, "reward", lambda m: m.update({"reward_inputs": [0, -1]})),
-                           ValueError, "reward.json.*reward_inputs"),
+    "missing absorbing value": (
+        lambda d: _edit_json(d, "reward", lambda m: m.pop("absorbing_value")),
+        ValueError,
+        "reward.json.*absorbing_value",
+    ),
+    "missing layer width": (
+        lambda d: _edit_json(d, "policy", lambda m: m["parts"]["pi"][0].pop("in")),
+        ValueError,
+        "policy.json",
+    ),
+    "wrong layer width": (
+        lambda d: _edit_json(d, "value", lambda m: m["parts"]["v"][0].update({"in": 3})),
+        ValueError,
+        "value.json",
+    ),
+    "unknown output": (
+        lambda d: _edit_json(d, "policy", lambda m: m.update({"output": "sample"})),
+        ValueError,
+        "policy.json",
+    ),
+    "bad reward columns": (
+        lambda d: _edit_json(d, "reward", lambda m: m.update({"reward_inputs": [0, -1]})),
+        ValueError,
+        "reward.json.*reward_inputs",
+    ),
     "not JSON": (lambda d: (d / "value.json").write_text("{oops"), ValueError, "value.json"),
     "missing json": (lambda d: (d / "value.json").unlink(), FileNotFoundError, "value.json"),
     "missing .pt": (lambda d: (d / "reward.pt").unlink(), FileNotFoundError, "reward.pt"),

@@ -12,8 +12,14 @@ from fastrl.spec import load_spec
 
 from .conftest import spec_file
 
-TINY = ["train.normalize.reward=false", "train.n_envs=2", "train.ppo.n_steps=64", "train.ppo.batch_size=64",
-        "train.ppo.n_epochs=1", "episode.time_limit=2"]
+TINY = [
+    "train.normalize.reward=false",
+    "train.n_envs=2",
+    "train.ppo.n_steps=64",
+    "train.ppo.batch_size=64",
+    "train.ppo.n_epochs=1",
+    "episode.time_limit=2",
+]
 
 
 def rows(batch: int, n: int = 100) -> Transitions:
@@ -44,8 +50,9 @@ def run_with_history(normalised: bool):
     if normalised:
         venv.obs_rms.mean[:], venv.obs_rms.var[:], venv.training = 3.0, 0.25, False
     model = build_model(spec, venv)
-    cb = AdversarialCallback(Discriminator(venv.observation_space.shape[0], "airl", 0.99), expert, epochs=1,
-                             batch_size=64, history=1000)
+    cb = AdversarialCallback(
+        Discriminator(venv.observation_space.shape[0], "airl", 0.99), expert, epochs=1, batch_size=64, history=1000
+    )
     fitted = []
     fit_epochs = cb.fit.epochs
     cb.fit.epochs = lambda policy, expert, n: fitted.append(len(policy)) or fit_epochs(policy, expert, n)

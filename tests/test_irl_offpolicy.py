@@ -13,9 +13,19 @@ from fastrl.spec import load_spec
 
 from .conftest import spec_file
 
-TINY = ["actions.mode=continuous", "train.algo=SAC", "train.n_envs=2", "train.sac.learning_starts=64",
-        "train.sac.batch_size=32", "train.sac.train_freq=8", "train.sac.gradient_steps=2", "train.sac.buffer_size=1000",
-        "train.sac.net_arch=[32, 32]", "episode.time_limit=4", "irl.algorithm=airl"]
+TINY = [
+    "actions.mode=continuous",
+    "train.algo=SAC",
+    "train.n_envs=2",
+    "train.sac.learning_starts=64",
+    "train.sac.batch_size=32",
+    "train.sac.train_freq=8",
+    "train.sac.gradient_steps=2",
+    "train.sac.buffer_size=1000",
+    "train.sac.net_arch=[32, 32]",
+    "episode.time_limit=4",
+    "irl.algorithm=airl",
+]
 
 
 @pytest.fixture(scope="module")
@@ -30,8 +40,9 @@ def train(spec, expert, current_rollout: bool, spectral: bool = False, steps: in
     venv = make_vec_env(spec, 2, 0)
     model = build_model(spec, venv, replay_buffer_class=RelabelingReplayBuffer)
     disc = Discriminator(venv.observation_space.shape[0], "airl", 0.99, hidden=(32, 32), spectral=spectral)
-    cb = OffPolicyAdversarialCallback(disc, expert, current_rollout=current_rollout, steps=2, batch_size=32,
-                                      every=every)
+    cb = OffPolicyAdversarialCallback(
+        disc, expert, current_rollout=current_rollout, steps=2, batch_size=32, every=every
+    )
     fit, cb.fits = cb.fit.steps, []
     cb.fit.steps = lambda policy, exp, n: cb.fits.append(model.num_timesteps) or fit(policy, exp, n)
     model.learn(steps, callback=cb)

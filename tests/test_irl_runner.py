@@ -17,12 +17,31 @@ from fastrl.spec import load_spec
 from .conftest import spec_file
 from .test_runner import only_run, recorded, rrd_verify
 
-TINY = ["train.n_envs=2", "train.ppo.n_steps=64", "train.ppo.batch_size=64", "train.ppo.n_epochs=1",
-        "train.log_every=128", "train.checkpoint_every=256", "evaluate.episodes=2", "evaluate.record_episodes=1",
-        "evaluate.image_every=0", "episode.time_limit=8", "irl.demonstrations.expert=2",
-        "irl.discriminator.batch_size=64", "evaluate.periodic_every=256", "evaluate.periodic_episodes=1"]
-SAC = ["actions.mode=continuous", "train.algo=SAC", "train.sac.learning_starts=64", "train.sac.batch_size=32",
-       "train.sac.train_freq=16", "train.sac.gradient_steps=4", "train.sac.net_arch=[32, 32]"]
+TINY = [
+    "train.n_envs=2",
+    "train.ppo.n_steps=64",
+    "train.ppo.batch_size=64",
+    "train.ppo.n_epochs=1",
+    "train.log_every=128",
+    "train.checkpoint_every=256",
+    "evaluate.episodes=2",
+    "evaluate.record_episodes=1",
+    "evaluate.image_every=0",
+    "episode.time_limit=8",
+    "irl.demonstrations.expert=2",
+    "irl.discriminator.batch_size=64",
+    "evaluate.periodic_every=256",
+    "evaluate.periodic_episodes=1",
+]
+SAC = [
+    "actions.mode=continuous",
+    "train.algo=SAC",
+    "train.sac.learning_starts=64",
+    "train.sac.batch_size=32",
+    "train.sac.train_freq=16",
+    "train.sac.gradient_steps=4",
+    "train.sac.net_arch=[32, 32]",
+]
 
 
 def sets(extra=()):
@@ -35,11 +54,14 @@ def invoke(args, runs: Path):
     return CliRunner().invoke(app, [*args, "--runs", str(runs), "--no-progress"])
 
 
-@pytest.mark.parametrize(("algorithm", "extra", "suffix"), [
-    ("gail", [], "-gail-ppo-s0"), ("airl", [], "-airl-ppo-s0"), ("airl", SAC, "-airl-sac-s0"), ("bc", [], "-bc-s0")])
+@pytest.mark.parametrize(
+    ("algorithm", "extra", "suffix"),
+    [("gail", [], "-gail-ppo-s0"), ("airl", [], "-airl-ppo-s0"), ("airl", SAC, "-airl-sac-s0"), ("bc", [], "-bc-s0")],
+)
 def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
-    res = invoke(["irl", str(spec_file("tracelines")), "--algorithm", algorithm, "--timesteps", "512",
-                  *sets(extra)], tmp_path)
+    res = invoke(
+        ["irl", str(spec_file("tracelines")), "--algorithm", algorithm, "--timesteps", "512", *sets(extra)], tmp_path
+    )
     assert res.exit_code == 0, res.output
     assert ("goes without it" in res.output) is (suffix == "-airl-sac-s0")  # the spec's ranking prior: PPO AIRL's
     run = only_run(tmp_path)
@@ -76,16 +98,23 @@ def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
 
 
 def test_airl_with_the_ranking_prior_logs_its_loss_and_gail_goes_without_it(tmp_path):
-    ranking = ["irl.discriminator.ranking=1", "irl.discriminator.ranking_noise=[0, 1]",
-               "irl.discriminator.ranking_episodes=1"]
-    res = invoke(["irl", str(spec_file("tracelines")), "--algorithm", "airl", "--timesteps", "256", *sets(ranking)],
-                 tmp_path / "airl")
+    ranking = [
+        "irl.discriminator.ranking=1",
+        "irl.discriminator.ranking_noise=[0, 1]",
+        "irl.discriminator.ranking_episodes=1",
+    ]
+    res = invoke(
+        ["irl", str(spec_file("tracelines")), "--algorithm", "airl", "--timesteps", "256", *sets(ranking)],
+        tmp_path / "airl",
+    )
     assert res.exit_code == 0, res.output
     rows = [json.loads(line) for line in (only_run(tmp_path / "airl") / "metrics.jsonl").read_text().splitlines()]
     losses = [r["irl/ranking_loss"] for r in rows if "irl/ranking_loss" in r]
     assert losses and all(np.isfinite(v) and v > 0 for v in losses)
-    res = invoke(["irl", str(spec_file("tracelines")), "--algorithm", "gail", "--timesteps", "256", *sets(ranking)],
-                 tmp_path / "gail")
+    res = invoke(
+        ["irl", str(spec_file("tracelines")), "--algorithm", "gail", "--timesteps", "256", *sets(ranking)],
+        tmp_path / "gail",
+    )
     assert res.exit_code == 0, res.output
     assert "irl.discriminator.ranking" not in res.output  # the shipped specs set the prior: GAIL goes without a word
     rows = (only_run(tmp_path / "gail") / "metrics.jsonl").read_text()
@@ -94,12 +123,14 @@ def test_airl_with_the_ranking_prior_logs_its_loss_and_gail_goes_without_it(tmp_
 
 def test_irl_reads_a_demo_folder_and_reports_bad_files(tmp_path):
     demos = tmp_path / "demos"
-    res = CliRunner().invoke(app, ["demos", "--expert", str(spec_file("tracelines")), "-n", "2", "-o", str(demos),
-                                   "--no-progress"])
+    res = CliRunner().invoke(
+        app, ["demos", "--expert", str(spec_file("tracelines")), "-n", "2", "-o", str(demos), "--no-progress"]
+    )
     assert res.exit_code == 0, res.output
     (demos / "broken.npz").write_bytes(b"not a trajectory")
-    res = invoke(["irl", str(spec_file("tracelines")), "--demos", str(demos), "--timesteps", "256", *sets()],
-                 tmp_path / "runs")
+    res = invoke(
+        ["irl", str(spec_file("tracelines")), "--demos", str(demos), "--timesteps", "256", *sets()], tmp_path / "runs"
+    )
     assert res.exit_code == 0, res.output
     assert "broken.npz" in res.output
     run = only_run(tmp_path / "runs")
@@ -110,8 +141,9 @@ def test_irl_reads_a_demo_folder_and_reports_bad_files(tmp_path):
 def test_irl_without_usable_demonstrations_is_a_clear_error(tmp_path):
     empty = tmp_path / "none"
     empty.mkdir()
-    res = invoke(["irl", str(spec_file("tracelines")), "--demos", str(empty), "--timesteps", "256", *sets()],
-                 tmp_path / "runs")
+    res = invoke(
+        ["irl", str(spec_file("tracelines")), "--demos", str(empty), "--timesteps", "256", *sets()], tmp_path / "runs"
+    )
     assert res.exit_code == 2
     assert "no usable demonstrations" in res.output and "Traceback" not in res.output
     res = invoke(["irl", str(spec_file("tracelines")), "--algorithm", "maxent", *sets()], tmp_path / "runs")
@@ -154,8 +186,16 @@ def test_the_averaged_reward_survives_a_resume_and_leaves_training_as_it_was(tmp
 
 
 def test_resuming_with_a_discriminator_the_spec_no_longer_builds_is_a_clear_error(tmp_path):
-    res = invoke(["run", str(spec_file("tracelines")), "--timesteps", "256",
-                  *sets(["irl.algorithm=gail", "irl.discriminator.ignore=[]"])], tmp_path)
+    res = invoke(
+        [
+            "run",
+            str(spec_file("tracelines")),
+            "--timesteps",
+            "256",
+            *sets(["irl.algorithm=gail", "irl.discriminator.ignore=[]"]),
+        ],
+        tmp_path,
+    )
     assert res.exit_code == 0, res.output
     run = only_run(tmp_path)
     spec = (run / "spec.yaml").read_text()

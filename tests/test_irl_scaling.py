@@ -40,8 +40,9 @@ def test_the_generator_gets_the_scaled_learned_reward(monkeypatch):
     expert = expert_transitions(fastrl.make(spec), expert_trajectories(fastrl.make(spec), range(2)))
     venv = make_vec_env(spec, 2, 0)
     model = build_model(spec, venv)
-    cb = AdversarialCallback(Discriminator(venv.observation_space.shape[0], "airl", 0.99), expert, epochs=1,
-                             batch_size=64, scale_reward=True)
+    cb = AdversarialCallback(
+        Discriminator(venv.observation_space.shape[0], "airl", 0.99), expert, epochs=1, batch_size=64, scale_reward=True
+    )
     seen = []
     real_scale = ReturnScale.__call__
 
@@ -62,15 +63,21 @@ def test_the_generator_gets_the_scaled_learned_reward(monkeypatch):
     np.testing.assert_allclose(buf[~ended], scaled[~ended], rtol=1e-5)
 
 
-@pytest.mark.parametrize(("algorithm", "setting", "expected"), [
-    ("airl", None, True), ("gail", None, False), ("airl", False, False), ("gail", True, True)])
+@pytest.mark.parametrize(
+    ("algorithm", "setting", "expected"),
+    [("airl", None, True), ("gail", None, False), ("airl", False, False), ("gail", True, True)],
+)
 def test_scaling_defaults_on_for_airl_and_off_for_gail(tmp_path, algorithm, setting, expected):
     from rich.console import Console
 
     from fastrl.runner.learner import build_learner
 
     value = "null" if setting is None else str(setting).lower()  # null: the default (the FAST specs set true)
-    sets = [*TINY, f"irl.algorithm={algorithm}", "irl.demonstrations.expert=1",
-            f"irl.discriminator.scale_reward={value}"]
+    sets = [
+        *TINY,
+        f"irl.algorithm={algorithm}",
+        "irl.demonstrations.expert=1",
+        f"irl.discriminator.scale_reward={value}",
+    ]
     learner = build_learner(load_spec(spec_file("tracelines"), sets), tmp_path, Console(quiet=True), progress=False)
     assert learner.callbacks[0].scale_reward is expected

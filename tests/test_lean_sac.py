@@ -13,8 +13,14 @@ from fastrl.spec import load_spec
 
 from .conftest import spec_file
 
-SETS = ["actions.mode=rates", "train.algo=SAC", "train.n_envs=1", "train.sac.learning_starts=200",
-        "train.sac.net_arch=[32, 32]", "train.sac.batch_size=64"]
+SETS = [
+    "actions.mode=rates",
+    "train.algo=SAC",
+    "train.n_envs=1",
+    "train.sac.learning_starts=200",
+    "train.sac.net_arch=[32, 32]",
+    "train.sac.batch_size=64",
+]
 
 
 def sac_pair():

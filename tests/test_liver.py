@@ -38,7 +38,7 @@ def world_vertices(u, organ: str) -> np.ndarray:
     """World vertices of an organ's compiled mesh geom."""
     g = u.model.geom(f"organ_{organ}")
     m = int(g.dataid[0])
-    verts = u.model.mesh_vert[u.model.mesh_vertadr[m]:u.model.mesh_vertadr[m] + u.model.mesh_vertnum[m]]
+    verts = u.model.mesh_vert[u.model.mesh_vertadr[m] : u.model.mesh_vertadr[m] + u.model.mesh_vertnum[m]]
     return u.data.geom_xpos[g.id] + verts @ u.data.geom_xmat[g.id].reshape(3, 3).T
 
 
@@ -163,8 +163,9 @@ def test_an_unreadable_mesh_file_is_a_spec_error(tmp_path):
 
 def _obj(path, verts, faces):
     """Write an OBJ file."""
-    path.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in verts) + "".join(
-        f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces))
+    path.write_text(
+        "".join(f"v {x} {y} {z}\n" for x, y, z in verts) + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
+    )
 
 
 TETRA = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
@@ -181,8 +182,9 @@ def test_a_mesh_outside_the_cavity_is_a_spec_error(tmp_path):
 def test_a_mesh_file_replaces_the_parametric_organ(tmp_path):
     (tmp_path / "meshes").mkdir()
     _obj(tmp_path / "meshes" / "gb.obj", TETRA * 20 + [30, -60, 10], TETRA_FACES)  # millimetres
-    path = write_spec(tmp_path, lambda d: d["scene"]["anatomy"]["gallbladder"].update(
-        mesh="meshes/gb.obj", scale=0.001))
+    path = write_spec(
+        tmp_path, lambda d: d["scene"]["anatomy"]["gallbladder"].update(mesh="meshes/gb.obj", scale=0.001)
+    )
     env = fastrl.make(path)
     env.reset(seed=0)
     world = world_vertices(env.unwrapped, "gallbladder")
@@ -197,10 +199,29 @@ def test_liver_tour_needs_an_abdomen_and_known_organs(tmp_path):
 
 def test_the_experiment_runs_end_to_end_and_resumes_without_redoing(tmp_path):
     runs = tmp_path / "runs"
-    args = ["run", str(LIVER), "--runs", str(runs), "--no-progress", "--set", "experiment.levels=2",
-            "--set", "experiment.per_level=3", "--set", "experiment.best=2", "--set", "experiment.timesteps=512",
-            "--set", "train.n_envs=2", "--set", "train.ppo.n_steps=128", "--set", "train.ppo.batch_size=128",
-            "--set", "evaluate.episodes=1"]
+    args = [
+        "run",
+        str(LIVER),
+        "--runs",
+        str(runs),
+        "--no-progress",
+        "--set",
+        "experiment.levels=2",
+        "--set",
+        "experiment.per_level=3",
+        "--set",
+        "experiment.best=2",
+        "--set",
+        "experiment.timesteps=512",
+        "--set",
+        "train.n_envs=2",
+        "--set",
+        "train.ppo.n_steps=128",
+        "--set",
+        "train.ppo.batch_size=128",
+        "--set",
+        "evaluate.episodes=1",
+    ]
     res = CliRunner().invoke(app, args)
     assert res.exit_code == 0, res.output
     assert "GAIL" in res.output and "AIRL" in res.output
@@ -215,8 +236,9 @@ def test_the_experiment_runs_end_to_end_and_resumes_without_redoing(tmp_path):
         assert {f.name for f in (run / algo / "networks").iterdir()} >= {"reward.pt", "value.pt", "policy.pt"}
     assert len(list((run / "best").glob("*.npz"))) == 2 and len(list((run / "cohort").glob("*.npz"))) == 6
     assert (run / "table3.png").stat().st_size > 10_000
-    verify = subprocess.run(["rerun", "rrd", "verify", str(run / "recording.rrd")], capture_output=True, text=True,
-                            timeout=120)
+    verify = subprocess.run(
+        ["rerun", "rrd", "verify", str(run / "recording.rrd")], capture_output=True, text=True, timeout=120
+    )
     assert verify.returncode == 0, verify.stderr
     entities = {str(c.entity_path) for c in RrdReader(str(run / "recording.rrd")).stream()}
     assert {"/figure", "/summary", "/world/scene/anatomy/right_lobe", "/correlations/airl/value_economy"} <= entities

@@ -23,10 +23,7 @@ def run():
     """Two TraceLines episodes of the scripted expert, with the task they ran in."""
     env = fastrl.make(spec_file("tracelines"), width=64, height=64)
     expert = ScriptedExpert(env)
-    eps = [
-        record_episode(env, expert.act, seed=s, image_every=10, on_reset=expert.reset)
-        for s in range(2)
-    ]
+    eps = [record_episode(env, expert.act, seed=s, image_every=10, on_reset=expert.reset) for s in range(2)]
     env.close()
     return env.unwrapped.task, eps
 

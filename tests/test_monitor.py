@@ -33,9 +33,19 @@ def test_evaluations_during_training_are_logged_and_can_stop_it(tmp_path):
         return {"eval/subtasks": next(scores)}
 
     part = Counter()
-    monitor = TrainingMonitor(tmp_path, list(spec.reward.features), 4096, 10_000, 192, progress=False,
-                              stats=lambda: {"irl/disc_accuracy": 0.75}, parts={"disc": part},
-                              evaluator=evaluator, eval_every=128, stop_at=0.9)
+    monitor = TrainingMonitor(
+        tmp_path,
+        list(spec.reward.features),
+        4096,
+        10_000,
+        192,
+        progress=False,
+        stats=lambda: {"irl/disc_accuracy": 0.75},
+        parts={"disc": part},
+        evaluator=evaluator,
+        eval_every=128,
+        stop_at=0.9,
+    )
     model.learn(4096, callback=monitor)
     assert monitor.stopped_early and len(calls) == 3 and model.num_timesteps < 4096
     rows = [json.loads(line) for line in (tmp_path / "metrics.jsonl").read_text().splitlines()]

@@ -72,13 +72,13 @@ def test_inconsistent_samples_are_rejected_with_their_reason():
     task = env.unwrapped.task
     poses = poses_from_portal(task, traj.time, traj.portal)
     side = quat_to_mat(poses[10:11, 4:8])[0][:, 0]
-    poses[10, 1:4] += 0.003 * side                        # tip 3 mm off the shaft line: axis misses the portal
+    poses[10, 1:4] += 0.003 * side  # tip 3 mm off the shaft line: axis misses the portal
     poses[20, 4:8] = tilt(poses[20, 4:8], np.radians(10))  # orientation tilted 10 degrees
-    poses[30, 5] = np.nan                                  # tracking dropout
-    poses[40, 0] = poses[38, 0]                            # time goes back
-    poses[50, 4:8] *= 1.1                                  # not a rotation
+    poses[30, 5] = np.nan  # tracking dropout
+    poses[40, 0] = poses[38, 0]  # time goes back
+    poses[50, 4:8] *= 1.1  # not a rotation
     axis = quat_to_mat(poses[60:61, 4:8])[0][:, 2]
-    poses[60, 1:4] = task.portal_point + 0.155 * axis      # deeper than the insertion range
+    poses[60, 1:4] = task.portal_point + 0.155 * axis  # deeper than the insertion range
     time, portal, report = portal_from_poses(task, poses)
     r = report.rejected
     assert (r["misses_portal"], r["axis_angle"]) == ([10, 20], [20])  # a 10 degree tilt also misses the portal
@@ -111,8 +111,20 @@ def test_cli_writes_a_loadable_trajectory_and_names_broken_files(tmp_path):
     poses = poses_from_portal(env.unwrapped.task, traj.time, traj.portal)
     poses[5, 1] += 0.01
     csv = write_csv(tmp_path / "s.csv", poses)
-    res = CliRunner().invoke(app, ["import-poses", str(spec_file("tracelines")), str(csv), "-o",
-                                   str(tmp_path / "out.npz"), "--subject", "s01", "--skill", "novice"])
+    res = CliRunner().invoke(
+        app,
+        [
+            "import-poses",
+            str(spec_file("tracelines")),
+            str(csv),
+            "-o",
+            str(tmp_path / "out.npz"),
+            "--subject",
+            "s01",
+            "--skill",
+            "novice",
+        ],
+    )
     assert res.exit_code == 0, res.output
     assert "1 rejected" in res.output and "misses_portal" in res.output and "lines 7" in res.output
     t = Trajectory.load(tmp_path / "out.npz")
@@ -120,8 +132,11 @@ def test_cli_writes_a_loadable_trajectory_and_names_broken_files(tmp_path):
     assert t.meta["spec"] == "tracelines" and t.meta["imported_from"] == "s.csv"
     (tmp_path / "cols.csv").write_text("\ufefftime,x,y,z,qw,qx,qy\n0,0,0,0,1,0,0\n")  # with a byte-order mark
     (tmp_path / "cell.csv").write_text(",".join(COLUMNS) + "\n0,0,0,0,1,0,0,0,0\n0.1,0,0,zero,1,0,0,0,0\n")
-    for name, why in (("cols.csv", "missing columns ['qz', 'cable']"), ("cell.csv", "cell.csv:3: column 'z'"),
-                      ("none.csv", "cannot read")):
+    for name, why in (
+        ("cols.csv", "missing columns ['qz', 'cable']"),
+        ("cell.csv", "cell.csv:3: column 'z'"),
+        ("none.csv", "cannot read"),
+    ):
         res = CliRunner().invoke(app, ["import-poses", str(spec_file("tracelines")), str(tmp_path / name)])
         assert res.exit_code == 2 and name in res.output and why in res.output, res.output
         assert "Traceback" not in res.output

@@ -32,8 +32,13 @@ from .test_runner import only_run, recorded, rrd_verify
 
 ROOT = Path(__file__).resolve().parent.parent
 # wide tolerances: the cue turns green and subtasks complete while keys move the scope, so there are events
-EASY = ["episode.time_limit=5", "task.cue.centring_deg=40", "task.cue.horizon_deg=180",
-        "task.cue.distance=[0.001, 0.2]", "task.cue.dwell=0.4"]
+EASY = [
+    "episode.time_limit=5",
+    "task.cue.centring_deg=40",
+    "task.cue.horizon_deg=180",
+    "task.cue.distance=[0.001, 0.2]",
+    "task.cue.dwell=0.4",
+]
 UP, ESC = 265, 256
 
 needs_x = pytest.mark.skipif(not (shutil.which("Xvfb") and shutil.which("xdotool")), reason="needs Xvfb and xdotool")
@@ -43,8 +48,11 @@ needs_x = pytest.mark.skipif(not (shutil.which("Xvfb") and shutil.which("xdotool
 def display():
     """A private Xvfb display for the real viewer window (-noreset: a killed last client must not reset it)."""
     n = next(n for n in range(91, 140) if not Path(f"/tmp/.X{n}-lock").exists())
-    proc = subprocess.Popen(["Xvfb", f":{n}", "-screen", "0", "1280x800x24", "-nolisten", "tcp", "-noreset"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(
+        ["Xvfb", f":{n}", "-screen", "0", "1280x800x24", "-nolisten", "tcp", "-noreset"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     time.sleep(1.0)
     assert proc.poll() is None, "Xvfb did not start"
     yield f":{n}"
@@ -59,15 +67,32 @@ def xenv(display: str) -> dict:
 
 def start_record(display: str, out: Path, extra=()) -> subprocess.Popen:
     """`fastrl record` in its own process, returned once its window exists."""
-    args = [sys.executable, "-m", "fastrl.cli", "record", str(spec_file("tracelines")), "--subject", "xdo tester",
-            "-o", str(out), "--linger", "0", *[a for kv in EASY for a in ("--set", kv)], *extra]
+    args = [
+        sys.executable,
+        "-m",
+        "fastrl.cli",
+        "record",
+        str(spec_file("tracelines")),
+        "--subject",
+        "xdo tester",
+        "-o",
+        str(out),
+        "--linger",
+        "0",
+        *[a for kv in EASY for a in ("--set", kv)],
+        *extra,
+    ]
     proc = subprocess.Popen(args, env=xenv(display), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     end = time.monotonic() + 60
     while time.monotonic() < end:
         if proc.poll() is not None:
             pytest.fail(f"fastrl record exited early: {proc.communicate()[1]}")
-        found = subprocess.run(["xdotool", "search", "--name", "MuJoCo"], env={**os.environ, "DISPLAY": display},
-                               capture_output=True, text=True)
+        found = subprocess.run(
+            ["xdotool", "search", "--name", "MuJoCo"],
+            env={**os.environ, "DISPLAY": display},
+            capture_output=True,
+            text=True,
+        )
         if found.returncode == 0 and found.stdout.strip():
             return proc
         time.sleep(0.2)
@@ -77,8 +102,9 @@ def start_record(display: str, out: Path, extra=()) -> subprocess.Popen:
 
 def xdotool(display: str, *args, timeout: float = 20) -> str:
     """Run xdotool on the test display."""
-    res = subprocess.run(["xdotool", *args], env={**os.environ, "DISPLAY": display}, capture_output=True, text=True,
-                         timeout=timeout)
+    res = subprocess.run(
+        ["xdotool", *args], env={**os.environ, "DISPLAY": display}, capture_output=True, text=True, timeout=timeout
+    )
     assert res.returncode == 0, res.stderr
     return res.stdout
 
@@ -86,9 +112,16 @@ def xdotool(display: str, *args, timeout: float = 20) -> str:
 class XClientMessage(ctypes.Structure):
     """Xlib's XClientMessageEvent."""
 
-    _fields_ = [("type", ctypes.c_int), ("serial", ctypes.c_ulong), ("send_event", ctypes.c_int),
-                ("display", ctypes.c_void_p), ("window", ctypes.c_ulong), ("message_type", ctypes.c_ulong),
-                ("format", ctypes.c_int), ("l", ctypes.c_long * 5)]
+    _fields_ = [
+        ("type", ctypes.c_int),
+        ("serial", ctypes.c_ulong),
+        ("send_event", ctypes.c_int),
+        ("display", ctypes.c_void_p),
+        ("window", ctypes.c_ulong),
+        ("message_type", ctypes.c_ulong),
+        ("format", ctypes.c_int),
+        ("l", ctypes.c_long * 5),
+    ]
 
 
 class XEvent(ctypes.Union):
@@ -122,8 +155,9 @@ def only_attempt(out: Path) -> Trajectory:
 
 
 @needs_x
-def test_keystrokes_to_the_real_window_drive_the_scope_and_the_attempt_replays_to_the_same_cue_events(display,
-                                                                                                    tmp_path):
+def test_keystrokes_to_the_real_window_drive_the_scope_and_the_attempt_replays_to_the_same_cue_events(
+    display, tmp_path
+):
     proc = start_record(display, tmp_path)
     time.sleep(0.5)
     xdotool(display, "search", "--name", "MuJoCo", "windowfocus", "keydown", "Up", "sleep", "1.0", "keyup", "Up")
@@ -136,11 +170,11 @@ def test_keystrokes_to_the_real_window_drive_the_scope_and_the_attempt_replays_t
     assert (m["source"], m["subject"], m["complete"], m["end"]) == ("human", "xdo tester", True, "quit")
     spec = load_spec(spec_file("tracelines"), EASY)
     assert m["spec_hash"] == spec_hash(spec)
-    assert 1 in set(traj.actions.tolist())                      # the Up key became pitch+ actions
-    assert traj.portal[:, 0].max() > traj.portal[0, 0] + 0.02   # and the scope pitched (rad)
-    assert np.ptp(traj.portal[:, 1]) < 1e-3                     # yaw untouched
-    assert np.allclose(np.diff(traj.time), 0.05)                # one sample per control step (20 Hz)
-    assert 45 < m["realtime"]["period_ms_mean"] < 75            # paced at the control rate (timing: bench, README)
+    assert 1 in set(traj.actions.tolist())  # the Up key became pitch+ actions
+    assert traj.portal[:, 0].max() > traj.portal[0, 0] + 0.02  # and the scope pitched (rad)
+    assert np.ptp(traj.portal[:, 1]) < 1e-3  # yaw untouched
+    assert np.allclose(np.diff(traj.time), 0.05)  # one sample per control step (20 Hz)
+    assert 45 < m["realtime"]["period_ms_mean"] < 75  # paced at the control rate (timing: bench, README)
     _, infos, _ = replay(FastEnv(spec), traj)
     assert len(m["events"]) >= 2 and cue_events(infos) == m["events"]
     fb = m["feedback"]  # scored when it ended; the same in the file, beside it, and in its Rerun recording
@@ -148,8 +182,13 @@ def test_keystrokes_to_the_real_window_drive_the_scope_and_the_attempt_replays_t
     saved = next(f for f in tmp_path.glob("*.npz") if ".partial" not in f.name)
     assert saved.with_suffix(".feedback.json").exists() and "/summary" in recorded(saved.with_suffix(".rrd"))[0]
     # and `fastrl replay` plays it back in the viewer and into Rerun
-    res = subprocess.run([sys.executable, "-m", "fastrl.cli", "replay", str(saved), "--speed", "4"], env=xenv(display),
-                         capture_output=True, text=True, timeout=120)
+    res = subprocess.run(
+        [sys.executable, "-m", "fastrl.cli", "replay", str(saved), "--speed", "4"],
+        env=xenv(display),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert res.returncode == 0, res.stderr
     assert f"played {len(traj.time)} of {len(traj.time)} samples" in res.stdout
     rrd_verify(saved.with_suffix(".replay.rrd"))
@@ -161,10 +200,50 @@ def test_an_interrupted_recording_keeps_what_was_recorded(display, tmp_path, how
     proc = start_record(display, tmp_path, ["--no-feedback", "--set", "episode.time_limit=60"])
     if how == "SIGINT":  # first pull the scope with the mouse: double-click the shaft, Ctrl + right-drag
         w = xdotool(display, "search", "--name", "MuJoCo").split()[0]
-        xdotool(display, "windowsize", w, "1280", "800", "windowmove", w, "0", "0", "sleep", "1",
-                "mousemove", "400", "411", "click", "--repeat", "2", "--delay", "80", "1", "sleep", "0.5",
-                "keydown", "ctrl", "mousedown", "3", "sleep", "0.3", "mousemove", "400", "450", "sleep", "0.3",
-                "mousemove", "400", "500", "sleep", "1", "mouseup", "3", "keyup", "ctrl")
+        xdotool(
+            display,
+            "windowsize",
+            w,
+            "1280",
+            "800",
+            "windowmove",
+            w,
+            "0",
+            "0",
+            "sleep",
+            "1",
+            "mousemove",
+            "400",
+            "411",
+            "click",
+            "--repeat",
+            "2",
+            "--delay",
+            "80",
+            "1",
+            "sleep",
+            "0.5",
+            "keydown",
+            "ctrl",
+            "mousedown",
+            "3",
+            "sleep",
+            "0.3",
+            "mousemove",
+            "400",
+            "450",
+            "sleep",
+            "0.3",
+            "mousemove",
+            "400",
+            "500",
+            "sleep",
+            "1",
+            "mouseup",
+            "3",
+            "keyup",
+            "ctrl",
+        )
     time.sleep(3.0)
     if how == "close":
         close_window(display, int(xdotool(display, "search", "--name", "MuJoCo").split()[0]))
@@ -215,8 +294,21 @@ def test_a_point_ahead_projects_to_the_image_centre():
 def tiny_run(tmp_path_factory):
     """A tiny AIRL run of TraceLines (policy, value and reward networks)."""
     runs = tmp_path_factory.mktemp("runs")
-    res = CliRunner().invoke(app, ["irl", str(spec_file("tracelines")), "--algorithm", "airl", "--timesteps", "256",
-                                   *sets(), "--runs", str(runs), "--no-progress"])
+    res = CliRunner().invoke(
+        app,
+        [
+            "irl",
+            str(spec_file("tracelines")),
+            "--algorithm",
+            "airl",
+            "--timesteps",
+            "256",
+            *sets(),
+            "--runs",
+            str(runs),
+            "--no-progress",
+        ],
+    )
     assert res.exit_code == 0, res.output
     return only_run(runs)
 
@@ -243,12 +335,17 @@ def test_assist_writes_suggestions_and_value_into_rerun_and_feedback_scores_the_
     assert res.exit_code == 0, res.output
     rrd_verify(out)
     entities, timelines = recorded(out)
-    assert {"/world/attempt/suggestion/tip", "/world/attempt/suggestion/view_centre", "/metrics/attempt/cue/value",
-            "/world/attempt/camera/image/suggestion/view_centre"} <= entities and "step" in timelines
+    assert {
+        "/world/attempt/suggestion/tip",
+        "/world/attempt/suggestion/view_centre",
+        "/metrics/attempt/cue/value",
+        "/world/attempt/camera/image/suggestion/view_centre",
+    } <= entities and "step" in timelines
     spec = load_spec(tiny_run / "spec.yaml")
     nets = load_networks(tiny_run / "networks")
-    fb = attempt_feedback(Scorer(spec, nets), Trajectory.load(demo), tmp_path / "refs.json", references=1,
-                          policy=nets.policy)
+    fb = attempt_feedback(
+        Scorer(spec, nets), Trajectory.load(demo), tmp_path / "refs.json", references=1, policy=nets.policy
+    )
     assert fb["normalised"]["heuristic"] is not None and fb["scores"]["reward"] is not None
     assert fb["agent"]["time"] > 0 and "trained agent" in feedback_text(fb)
     assert 1 <= len(fb["worst_moments"]) <= 3 and "largest deviations" in feedback_text(fb)

@@ -16,9 +16,18 @@ from fastrl.cli import app
 
 from .conftest import spec_file
 
-TINY = ["train.n_envs=2", "train.ppo.n_steps=64", "train.ppo.batch_size=64",
-        "train.ppo.n_epochs=1", "train.log_every=128", "train.checkpoint_every=256",
-        "evaluate.episodes=2", "evaluate.record_episodes=1", "evaluate.image_every=10", "episode.time_limit=8"]
+TINY = [
+    "train.n_envs=2",
+    "train.ppo.n_steps=64",
+    "train.ppo.batch_size=64",
+    "train.ppo.n_epochs=1",
+    "train.log_every=128",
+    "train.checkpoint_every=256",
+    "evaluate.episodes=2",
+    "evaluate.record_episodes=1",
+    "evaluate.image_every=10",
+    "episode.time_limit=8",
+]
 
 
 def sets(extra=()):
@@ -40,8 +49,13 @@ def only_run(runs: Path) -> Path:
 
 def rrd_verify(path: Path) -> str:
     """Output of `rerun rrd verify`."""
-    res = subprocess.run(["rerun", "rrd", "verify", str(path)], capture_output=True, text=True, timeout=120,
-                         env={**os.environ, "CI": "1"})
+    res = subprocess.run(
+        ["rerun", "rrd", "verify", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "CI": "1"},
+    )
     assert res.returncode == 0, res.stderr
     return res.stdout + res.stderr
 
@@ -60,8 +74,17 @@ def test_a_run_directory_is_complete_and_its_recording_valid(tmp_path):
     assert res.exit_code == 0, res.output
     run = only_run(tmp_path)
     assert run.parent.name == "tracelines" and run.name.endswith("-ppo-s0")
-    for name in ("spec.yaml", "model.xml", "meta.json", "eval.json", "recording.rrd", "metrics.jsonl",
-                 "final/weights.pt", "final/normalize.npz", "final/state.json"):
+    for name in (
+        "spec.yaml",
+        "model.xml",
+        "meta.json",
+        "eval.json",
+        "recording.rrd",
+        "metrics.jsonl",
+        "final/weights.pt",
+        "final/normalize.npz",
+        "final/state.json",
+    ):
         assert (run / name).exists(), name
     assert list((run / "checkpoints").glob("*/weights.pt"))
     meta = json.loads((run / "meta.json").read_text())
@@ -69,8 +92,14 @@ def test_a_run_directory_is_complete_and_its_recording_valid(tmp_path):
     assert meta["trained_timesteps"] >= 512
     ev = json.loads((run / "eval.json").read_text())
     assert ev["agent"]["episodes"] == 2 and ev["expert"]["success_rate"] == 1.0
-    assert {"success_rate", "subtasks_completed", "return_mean", "episode_time_mean", "path_length_mean",
-            "features_mean"} <= set(ev["agent"])
+    assert {
+        "success_rate",
+        "subtasks_completed",
+        "return_mean",
+        "episode_time_mean",
+        "path_length_mean",
+        "features_mean",
+    } <= set(ev["agent"])
     assert "1 file verified" in rrd_verify(run / "recording.rrd")
     entities, timelines = recorded(run / "recording.rrd")
     assert any(e.startswith("/world/scene") for e in entities)
@@ -83,8 +112,10 @@ def test_a_run_directory_is_complete_and_its_recording_valid(tmp_path):
 
 
 def test_set_overrides_reach_the_run_and_bad_ones_are_reported(tmp_path):
-    res = run_cli(["run", str(spec_file("periscoping")), "--timesteps", "256", "--seed", "3",
-                   *sets(["task.cue.dwell=0.2"])], tmp_path)
+    res = run_cli(
+        ["run", str(spec_file("periscoping")), "--timesteps", "256", "--seed", "3", *sets(["task.cue.dwell=0.2"])],
+        tmp_path,
+    )
     assert res.exit_code == 0, res.output
     run = only_run(tmp_path)
     assert run.name.endswith("-s3")
@@ -115,10 +146,15 @@ def default_sigint() -> None:
 def start_cli(args, cwd: Path) -> subprocess.Popen:
     """The real console script in a subprocess."""
     env = {**os.environ, "CI": "1", "MUJOCO_GL": "egl"}
-    return subprocess.Popen([sys.executable, "-m", "fastrl.cli", *args], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=default_sigint)
-
+    return subprocess.Popen(
+        [sys.executable, "-m", "fastrl.cli", *args],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=default_sigint,
+    )
 
 
 def wait_for(path: Path, proc: subprocess.Popen, timeout: float = 120.0) -> None:
@@ -132,8 +168,10 @@ def wait_for(path: Path, proc: subprocess.Popen, timeout: float = 120.0) -> None
 
 def test_sigint_leaves_a_valid_recording_and_a_checkpoint_then_resume_continues(tmp_path):
     runs = tmp_path / "runs"
-    proc = start_cli(["run", str(spec_file("tracelines")), "--timesteps", "200000", "--runs", str(runs),
-                      "--no-progress", *sets()], tmp_path)
+    proc = start_cli(
+        ["run", str(spec_file("tracelines")), "--timesteps", "200000", "--runs", str(runs), "--no-progress", *sets()],
+        tmp_path,
+    )
     deadline = time.time() + 120
     while not list(runs.glob("*/*/metrics.jsonl")):
         assert proc.poll() is None, proc.communicate()
@@ -167,8 +205,9 @@ def test_sigint_leaves_a_valid_recording_and_a_checkpoint_then_resume_continues(
 @pytest.mark.parametrize("target", ["expert", "run"])
 def test_eval_command(tmp_path, target):
     if target == "expert":
-        res = CliRunner().invoke(app, ["eval", "--expert", str(spec_file("periscoping")), "--episodes", "2",
-                                       "-o", str(tmp_path / "e.json")])
+        res = CliRunner().invoke(
+            app, ["eval", "--expert", str(spec_file("periscoping")), "--episodes", "2", "-o", str(tmp_path / "e.json")]
+        )
         assert res.exit_code == 0, res.output
         assert json.loads((tmp_path / "e.json").read_text())["expert"]["success_rate"] == 1.0
     else:

@@ -270,9 +270,7 @@ def test_duplicate_key():
     """A repeated key is an error naming both lines, not a silent overwrite."""
     path = BAD / "duplicate_key.yaml"
     text = path.read_text()
-    first, second = [
-        n for n, line in enumerate(text.splitlines(), 1) if line.startswith("  radius:")
-    ]
+    first, second = [n for n, line in enumerate(text.splitlines(), 1) if line.startswith("  radius:")]
     [issue] = errors(path)
     assert issue.line == second
     assert issue.message == f"duplicate key 'radius' (first at line {first})"

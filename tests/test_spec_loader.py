@@ -166,11 +166,7 @@ def test_line_map_standalone():
 
 
 def test_float_exponents_in_files(tmp_path):
-    data, _ = read_yaml(
-        write(
-            tmp_path, "a: 1e-3\nb: 3e5\nc: -2.5e+2\nd: 1.5E3\ne: 1_000\nf: '1e-3'\ng: 1e\nh: 2.0\n"
-        )
-    )
+    data, _ = read_yaml(write(tmp_path, "a: 1e-3\nb: 3e5\nc: -2.5e+2\nd: 1.5E3\ne: 1_000\nf: '1e-3'\ng: 1e\nh: 2.0\n"))
     assert data == {
         "a": 0.001,
         "b": 300000.0,
@@ -218,21 +214,14 @@ def test_unknown_key_in_nested_mapping_with_suggestion(tmp_path):
     p = write(tmp_path, text)
     with pytest.raises(SpecError) as exc:
         load_model(p, Task)
-    assert issues(exc) == [
-        (4, "train.batch_siz", "unknown field 'batch_siz' (did you mean 'batch_size'?)")
-    ]
-    assert (
-        str(exc.value)
-        == f"{p}:4: train.batch_siz: unknown field 'batch_siz' (did you mean 'batch_size'?)"
-    )
+    assert issues(exc) == [(4, "train.batch_siz", "unknown field 'batch_siz' (did you mean 'batch_size'?)")]
+    assert str(exc.value) == f"{p}:4: train.batch_siz: unknown field 'batch_siz' (did you mean 'batch_size'?)"
 
 
 def test_did_you_mean_names_the_close_field_even_when_present(tmp_path):
     p = write(
         tmp_path,
-        "name: n\n"
-        "train: {timesteps: 5, batch_size: 2, batch_sizes: 3}\n"
-        "target: {kind: ring, radius: 1}\n",
+        "name: n\ntrain: {timesteps: 5, batch_size: 2, batch_sizes: 3}\ntarget: {kind: ring, radius: 1}\n",
     )
     with pytest.raises(SpecError) as exc:
         load_model(p, Task)
@@ -294,9 +283,7 @@ def test_context_is_passed(tmp_path):
 
 
 def test_discriminated_union_tag_dropped_from_path(tmp_path):
-    p = write(
-        tmp_path, GOOD.replace("  kind: ring\n  radius: 0.02\n", "  kind: peg\n  lenght: 1\n")
-    )
+    p = write(tmp_path, GOOD.replace("  kind: ring\n  radius: 0.02\n", "  kind: peg\n  lenght: 1\n"))
     with pytest.raises(SpecError) as exc:
         load_model(p, Task)
     assert issues(exc) == [
@@ -567,9 +554,7 @@ def test_suggestion_uses_the_selected_union_member(tmp_path):
     p = write(tmp_path, GOOD.replace("  radius: 0.02\n", "  radius: 0.02\n  lenght: 1\n"))
     with pytest.raises(SpecError) as exc:
         load_model(p, Task)
-    assert issues(exc) == [
-        (16, "target.lenght", "unknown field 'lenght'")
-    ]  # 'length' belongs to Peg, not Ring
+    assert issues(exc) == [(16, "target.lenght", "unknown field 'lenght'")]  # 'length' belongs to Peg, not Ring
 
 
 def _double(v: int) -> int:

@@ -83,8 +83,14 @@ def test_observation_terms_have_their_declared_sizes():
 
 
 def test_target_in_camera_and_horizon_error():
-    s = state(cam_pos=(0.0, 0.0, 0.0), cam_fwd=(0.0, 0.0, -1.0), cam_up=(0.0, 1.0, 0.0), cam_right=(1.0, 0.0, 0.0),
-              target_pos=(0.0, 0.0, -0.05), target_up=(1.0, 0.0, 0.0))
+    s = state(
+        cam_pos=(0.0, 0.0, 0.0),
+        cam_fwd=(0.0, 0.0, -1.0),
+        cam_up=(0.0, 1.0, 0.0),
+        cam_right=(1.0, 0.0, 0.0),
+        target_pos=(0.0, 0.0, -0.05),
+        target_up=(1.0, 0.0, 0.0),
+    )
     assert OBSERVATION_TERMS["target_in_camera"].fn(s) == pytest.approx((0.0, 0.0, 1.0))
     assert OBSERVATION_TERMS["horizon_error"].fn(s) == pytest.approx((1.0, 0.0))
 

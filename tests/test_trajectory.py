@@ -15,20 +15,27 @@ from .conftest import spec_file
 
 
 def test_round_trip_keeps_every_field(tmp_path):
-    t = Trajectory(np.arange(4) * 0.05, np.random.default_rng(0).normal(size=(4, 5)),
-                   {"spec": "x", "source": "human", "subject": "a"}, np.arange(3))
+    t = Trajectory(
+        np.arange(4) * 0.05,
+        np.random.default_rng(0).normal(size=(4, 5)),
+        {"spec": "x", "source": "human", "subject": "a"},
+        np.arange(3),
+    )
     back = Trajectory.load(t.save(tmp_path / "t.npz"))
     assert np.array_equal(back.time, t.time) and np.array_equal(back.portal, t.portal)
     assert back.meta == t.meta and np.array_equal(back.actions, t.actions)
 
 
-@pytest.mark.parametrize("time, portal, meta, why", [
-    (np.zeros(1), np.zeros((1, 5)), {}, "T >= 2"),
-    (np.arange(3.0), np.zeros((3, 4)), {}, "shape (3, 5)"),
-    (np.arange(3.0), np.array([[0, 0, np.nan, 0, 0]] * 3), {}, "non-finite"),
-    (np.array([0.0, 0.1, 0.1]), np.zeros((3, 5)), {}, "increase"),
-    (np.arange(3.0), np.zeros((3, 5)), {"source": "robot"}, "meta.source"),
-])
+@pytest.mark.parametrize(
+    "time, portal, meta, why",
+    [
+        (np.zeros(1), np.zeros((1, 5)), {}, "T >= 2"),
+        (np.arange(3.0), np.zeros((3, 4)), {}, "shape (3, 5)"),
+        (np.arange(3.0), np.array([[0, 0, np.nan, 0, 0]] * 3), {}, "non-finite"),
+        (np.array([0.0, 0.1, 0.1]), np.zeros((3, 5)), {}, "increase"),
+        (np.arange(3.0), np.zeros((3, 5)), {"source": "robot"}, "meta.source"),
+    ],
+)
 def test_contract_violations_are_named(time, portal, meta, why):
     with pytest.raises(TrajectoryError, match=why.replace("(", r"\(").replace(")", r"\)")):
         Trajectory(time, portal, meta)
@@ -44,8 +51,21 @@ def test_corrupt_and_foreign_files_are_reported_by_name(tmp_path):
 
 
 def test_expert_demos_replay_to_identical_observations(tmp_path):
-    res = CliRunner().invoke(app, ["demos", "--expert", str(spec_file("tracelines")), "-n", "2", "-o",
-                                   str(tmp_path), "--seed", "5", "--no-progress"])
+    res = CliRunner().invoke(
+        app,
+        [
+            "demos",
+            "--expert",
+            str(spec_file("tracelines")),
+            "-n",
+            "2",
+            "-o",
+            str(tmp_path),
+            "--seed",
+            "5",
+            "--no-progress",
+        ],
+    )
     assert res.exit_code == 0, res.output
     files = sorted(tmp_path.glob("*.npz"))
     assert len(files) == 2

@@ -17,8 +17,16 @@ def normalize_from_data(venv: VecEnv, observations: np.ndarray) -> None:
         venv.training = False
 
 
-def behaviour_clone(model: BaseAlgorithm, venv: VecEnv, observations: np.ndarray, actions: np.ndarray,
-                    epochs: int = 20, batch_size: int = 256, lr: float = 1e-3, seed: int = 0) -> list[float]:
+def behaviour_clone(
+    model: BaseAlgorithm,
+    venv: VecEnv,
+    observations: np.ndarray,
+    actions: np.ndarray,
+    epochs: int = 20,
+    batch_size: int = 256,
+    lr: float = 1e-3,
+    seed: int = 0,
+) -> list[float]:
     """Maximise the policy's log-likelihood of the demonstrated actions; return the mean loss per epoch."""
     normalize_from_data(venv, observations)
     x = venv.normalize_obs(observations) if isinstance(venv, VecNormalize) else observations
@@ -33,7 +41,7 @@ def behaviour_clone(model: BaseAlgorithm, venv: VecEnv, observations: np.ndarray
         order = rng.permutation(len(obs_t))
         total = 0.0
         for start in range(0, len(order), batch_size):
-            idx = torch.as_tensor(order[start:start + batch_size])
+            idx = torch.as_tensor(order[start : start + batch_size])
             _, log_prob, entropy = policy.evaluate_actions(obs_t[idx], act_t[idx])
             loss = -log_prob.mean() - 1e-3 * (entropy.mean() if entropy is not None else 0.0)
             optim.zero_grad()

@@ -104,5 +104,11 @@ def run_expert_episode(env, seed: int | None = None, max_steps: int | None = Non
         steps += 1
         if term or trunc:
             break
-    return {"return": total, "steps": steps, "subtasks": info["subtask"], "subtasks_total": info["subtasks_total"],
-            "success": info["success"], "time": info["time"]}
+    return {
+        "return": total,
+        "steps": steps,
+        "subtasks": info["subtask"],
+        "subtasks_total": info["subtasks_total"],
+        "success": info["success"],
+        "time": info["time"],
+    }

@@ -58,8 +58,15 @@ def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) 
     arch = {"pi": net, "vf": net} if spec.train.algo == "PPO" else {"pi": net, "qf": net}
     algo = LeanSAC if params.pop("lean_update", False) else ALGOS[spec.train.algo]
     torch.set_num_threads(1)
-    return algo("MlpPolicy", venv, seed=spec.train.seed if seed is None else seed, verbose=0,
-                device="cpu", policy_kwargs={"net_arch": arch, "activation_fn": act}, **params)
+    return algo(
+        "MlpPolicy",
+        venv,
+        seed=spec.train.seed if seed is None else seed,
+        verbose=0,
+        device="cpu",
+        policy_kwargs={"net_arch": arch, "activation_fn": act},
+        **params,
+    )
 
 
 def _optimizers(model: BaseAlgorithm) -> dict[str, torch.optim.Optimizer]:
@@ -89,9 +96,15 @@ def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict,
         torch.save({name: part.state_dict() for name, part in parts.items()}, path / "parts.pt.tmp")
         (path / "parts.pt.tmp").replace(path / "parts.pt")
     if isinstance(venv, VecNormalize):
-        np.savez(path / "normalize.npz", obs_mean=venv.obs_rms.mean, obs_var=venv.obs_rms.var,
-                 obs_count=venv.obs_rms.count, ret_mean=venv.ret_rms.mean, ret_var=venv.ret_rms.var,
-                 ret_count=venv.ret_rms.count)
+        np.savez(
+            path / "normalize.npz",
+            obs_mean=venv.obs_rms.mean,
+            obs_var=venv.obs_rms.var,
+            obs_count=venv.obs_rms.count,
+            ret_mean=venv.ret_rms.mean,
+            ret_var=venv.ret_rms.var,
+            ret_count=venv.ret_rms.count,
+        )
     (path / "state.json").write_text(json.dumps({**state, "timesteps": int(model.num_timesteps)}, indent=2))
     return path
 
@@ -109,8 +122,10 @@ def load_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv | None, parts
             try:
                 part.load_state_dict(saved.get(name, {}))  # a part the run had not saved yet starts empty
             except (RuntimeError, KeyError) as e:  # shapes differ, or it was never saved: the spec changed
-                raise CheckpointMismatch(f"{path / 'parts.pt'}: the saved {name} does not fit what the run's "
-                                         f"spec builds now ({str(e).splitlines()[-1].strip()})") from e
+                raise CheckpointMismatch(
+                    f"{path / 'parts.pt'}: the saved {name} does not fit what the run's "
+                    f"spec builds now ({str(e).splitlines()[-1].strip()})"
+                ) from e
     model.policy.load_state_dict(tensors["policy"])
     for name, opt in _optimizers(model).items():
         opt.load_state_dict(tensors["optimizers"][name])

@@ -41,12 +41,11 @@ def plot_paths(scored: list[TrajectoryScores], by: str, path: Path, radius: floa
     plt = _pyplot()
 
     groups = list(_groups(scored, by).items())[:MAX_PANELS]
-    fig, axes = plt.subplots(1, len(groups), figsize=(3.3 * len(groups), 3.6), squeeze=False, sharex=True,
-                             sharey=True)
+    fig, axes = plt.subplots(1, len(groups), figsize=(3.3 * len(groups), 3.6), squeeze=False, sharex=True, sharey=True)
     xy_all = np.concatenate([s.tip[:, :2] for s in scored]) * 1000
     (x0, y0), (x1, y1) = xy_all.min(axis=0) - 10, xy_all.max(axis=0) + 10
     with_values = [s.values for s in scored if s.values is not None]
-    lo, hi = (np.percentile(np.concatenate(with_values), [5, 95]) if with_values else (0.0, 1.0))
+    lo, hi = np.percentile(np.concatenate(with_values), [5, 95]) if with_values else (0.0, 1.0)
     sc = None
     for ax, (name, members) in zip(axes[0], groups):
         ax.add_patch(plt.Circle((0, 0), radius * 1000, fill=False, color="0.6", lw=1))
@@ -54,16 +53,23 @@ def plot_paths(scored: list[TrajectoryScores], by: str, path: Path, radius: floa
             xy = s.tip[:, :2] * 1000
             ax.plot(xy[:, 0], xy[:, 1], color="0.8", lw=0.5, zorder=1)
             colour = s.values if s.values is not None else s.time
-            sc = ax.scatter(xy[:, 0], xy[:, 1], c=colour, s=3, cmap="viridis", vmin=lo if s.values is not None
-                            else None, vmax=hi if s.values is not None else None, zorder=2)
+            sc = ax.scatter(
+                xy[:, 0],
+                xy[:, 1],
+                c=colour,
+                s=3,
+                cmap="viridis",
+                vmin=lo if s.values is not None else None,
+                vmax=hi if s.values is not None else None,
+                zorder=2,
+            )
             ax.scatter(*xy[0], marker="*", s=60, color="k", zorder=3)
             ax.scatter(*xy[-1], marker="*", s=60, color="tab:red", zorder=3)
         ax.set(title=f"{name} (n={len(members)})", xlabel="x (mm)", aspect="equal", xlim=(x0, x1), ylim=(y0, y1))
     axes[0][0].set_ylabel("y (mm)")
     if sc is not None:
         fig.colorbar(sc, ax=axes[0].tolist(), label="learned value V(s)" if with_values else "time (s)", shrink=0.8)
-    fig.suptitle("Camera paths projected on the dome's XY plane (black star: start, red star: end)",
-                 fontsize=10)
+    fig.suptitle("Camera paths projected on the dome's XY plane (black star: start, red star: end)", fontsize=10)
     return _save(fig, path)
 
 
@@ -79,10 +85,14 @@ def plot_deviation(scored: list[TrajectoryScores], devs: dict[str, np.ndarray], 
         pct = np.linspace(0, 100, rows.shape[1])
         mean = rows.mean(axis=0)
         line = ax.plot(pct, mean, label=f"{name} ({rows.mean():.0f} mm)")[0]
-        ax.fill_between(pct, np.percentile(rows, 25, axis=0), np.percentile(rows, 75, axis=0),
-                        color=line.get_color(), alpha=0.15)
-    ax.set(xlabel="procedure completed (% of the attempt's duration)", ylabel="distance to expert path (mm)",
-           title="Deviation from the scripted expert on the same seed (mean, IQR)")
+        ax.fill_between(
+            pct, np.percentile(rows, 25, axis=0), np.percentile(rows, 75, axis=0), color=line.get_color(), alpha=0.15
+        )
+    ax.set(
+        xlabel="procedure completed (% of the attempt's duration)",
+        ylabel="distance to expert path (mm)",
+        title="Deviation from the scripted expert on the same seed (mean, IQR)",
+    )
     ax.legend(fontsize=8)
     return _save(fig, path)
 
@@ -105,8 +115,10 @@ def plot_distributions(report: dict, path: Path) -> Path:
             ax.scatter(np.full(len(d), i) + np.linspace(-0.15, 0.15, len(d)), d, s=6, alpha=0.6)
         ax.set_xticks(range(1, len(names) + 1), names, rotation=45, fontsize=7)
         rank = report["ranking"].get(k)
-        ax.set_title(k + (f"\ntau-b {rank['kendall_tau_b']:.2f}" if rank and rank["kendall_tau_b"] is not None
-                          else ""), fontsize=9)
+        ax.set_title(
+            k + (f"\ntau-b {rank['kendall_tau_b']:.2f}" if rank and rank["kendall_tau_b"] is not None else ""),
+            fontsize=9,
+        )
     fig.tight_layout()
     return _save(fig, path)
 

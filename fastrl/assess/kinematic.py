@@ -24,8 +24,9 @@ def log_dimensionless_jerk(tip: np.ndarray, time: np.ndarray) -> float:
     return float(-np.log(max(duration**3 / peak**2 * integral, 1e-300)))
 
 
-def deviation_by_progress(tip: np.ndarray, time: np.ndarray, reference: np.ndarray, ref_time: np.ndarray,
-                          bins: int = 100) -> np.ndarray:
+def deviation_by_progress(
+    tip: np.ndarray, time: np.ndarray, reference: np.ndarray, ref_time: np.ndarray, bins: int = 100
+) -> np.ndarray:
     """Distance to the reference path at each percent of the procedure (both paths time-normalised)."""
     u = np.linspace(0.0, 1.0, bins + 1)
 

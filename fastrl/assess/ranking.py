@@ -44,11 +44,18 @@ def rank_correlations(scores, labels, n_boot: int = 1000, seed: int = 0, level: 
     levels = np.unique(labels)
     means = [float(scores[labels == v].mean()) for v in levels]
     level_tau = _stats(np.array(means), levels)[2] if len(levels) > 1 else float("nan")
-    return {"n": int(len(scores)), "spearman": _finite(rho), "spearman_p": _finite(rho_p), "spearman_ci": ci(0),
-            "kendall_tau_b": _finite(tau), "kendall_p": _finite(tau_p), "kendall_ci": ci(1),
-            "level_means": dict(zip([_label(v) for v in levels], means)),
-            "levels_in_order": bool(len(levels) > 1 and np.all(np.diff(means) > 0)),
-            "kendall_tau_b_of_level_means": _finite(level_tau)}
+    return {
+        "n": int(len(scores)),
+        "spearman": _finite(rho),
+        "spearman_p": _finite(rho_p),
+        "spearman_ci": ci(0),
+        "kendall_tau_b": _finite(tau),
+        "kendall_p": _finite(tau_p),
+        "kendall_ci": ci(1),
+        "level_means": dict(zip([_label(v) for v in levels], means)),
+        "levels_in_order": bool(len(levels) > 1 and np.all(np.diff(means) > 0)),
+        "kendall_tau_b_of_level_means": _finite(level_tau),
+    }
 
 
 def _label(v: float):

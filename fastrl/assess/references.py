@@ -19,15 +19,24 @@ def reference_trajectories(scorer: Scorer, episodes: int, seed: int = REFERENCE_
     env = scorer.env
     env.action_space.seed(seed)
     seeds = range(seed, seed + episodes)
-    random = [rollout_trajectory(env, lambda _obs: env.action_space.sample(), s,
-                                 {"source": "agent", "subject": "random-policy"})[0] for s in seeds]
+    random = [
+        rollout_trajectory(
+            env, lambda _obs: env.action_space.sample(), s, {"source": "agent", "subject": "random-policy"}
+        )[0]
+        for s in seeds
+    ]
     return {"random": random, "expert": expert_trajectories(env, seeds)}
 
 
 def reference_scores(scorer: Scorer, episodes: int = 3, cache: Path | None = None) -> dict:
     """Mean scores of each reference; read from / written to `cache` (a JSON file) when given."""
-    key = {"task_hash": task_hash(scorer.spec), "episodes": episodes, "learned": scorer.learned,
-           "reward_hash": _reward_identity(scorer), "scores": list(NORMALISED)}
+    key = {
+        "task_hash": task_hash(scorer.spec),
+        "episodes": episodes,
+        "learned": scorer.learned,
+        "reward_hash": _reward_identity(scorer),
+        "scores": list(NORMALISED),
+    }
     if cache is not None and cache.exists():
         try:
             saved = json.loads(cache.read_text())
@@ -35,13 +44,18 @@ def reference_scores(scorer: Scorer, episodes: int = 3, cache: Path | None = Non
                 return saved
         except (OSError, json.JSONDecodeError):
             pass  # a broken cache is recomputed
-    out = {"key": key, "description": f"means over {episodes} episodes on seeds {REFERENCE_SEED}.."
-                                      f"{REFERENCE_SEED + episodes - 1}: random = uniform random actions, "
-                                      "expert = the scripted expert (fastrl.agents.expert)"}
+    out = {
+        "key": key,
+        "description": f"means over {episodes} episodes on seeds {REFERENCE_SEED}.."
+        f"{REFERENCE_SEED + episodes - 1}: random = uniform random actions, "
+        "expert = the scripted expert (fastrl.agents.expert)",
+    }
     for name, trajs in reference_trajectories(scorer, episodes).items():
         scored = [scorer.score(t) for t in trajs]
-        out[name] = {k: (None if scored[0].scores[k] is None else float(np.mean([s.scores[k] for s in scored])))
-                     for k in (*NORMALISED, "subtasks", "path_length", "time", "smoothness")}
+        out[name] = {
+            k: (None if scored[0].scores[k] is None else float(np.mean([s.scores[k] for s in scored])))
+            for k in (*NORMALISED, "subtasks", "path_length", "time", "smoothness")
+        }
     if cache is not None:
         cache.parent.mkdir(parents=True, exist_ok=True)
         cache.write_text(json.dumps(out, indent=2))

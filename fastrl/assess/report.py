@@ -23,8 +23,9 @@ def trajectory_files(paths: Iterable[Path]) -> list[Path]:
     return files
 
 
-def score_files(scorer: Scorer, files: list[Path],
-                on_file: Callable[[Path], None] | None = None) -> tuple[list[TrajectoryScores], list[str]]:
+def score_files(
+    scorer: Scorer, files: list[Path], on_file: Callable[[Path], None] | None = None
+) -> tuple[list[TrajectoryScores], list[str]]:
     """Score every file; a bad or foreign file becomes a message naming it, and the rest are still scored."""
     scored, problems = [], []
     for f in files:
@@ -40,8 +41,13 @@ def score_files(scorer: Scorer, files: list[Path],
 
 def row(s: TrajectoryScores) -> dict:
     """One flat row: normalised learned and heuristic scores, raw kinematic ones, and the labels."""
-    out = {"file": s.name, "subject": s.subject, "skill": s.skill, "source": s.meta.get("source"),
-           "success": s.meta.get("success")}
+    out = {
+        "file": s.name,
+        "subject": s.subject,
+        "skill": s.skill,
+        "source": s.meta.get("source"),
+        "success": s.meta.get("success"),
+    }
     for k in COLUMNS + tuple(k for k in TOUR_COLUMNS if k in s.scores):
         normalised = s.normalised.get(k)
         out[k] = normalised if k in NORMALISED and normalised is not None else s.scores.get(k)
@@ -65,13 +71,24 @@ def build_report(scored: list[TrajectoryScores], references: dict, problems: lis
     keys += tuple(k for k in TOUR_COLUMNS if rows and k in rows[0])
     by = group_key(rows) if rows else "subject"
     grouped = [{**r, "subject": f"level {r['skill']}" if by == "skill" else r["subject"]} for r in rows]
-    warnings = [f"{k}: the random policy scores above the scripted expert ({references['random'][k]:.4g} vs "
-                f"{references['expert'][k]:.4g}): it is shown raw, not normalised"
-                for k in NORMALISED if k in keys and _inverted(references, k)]
-    report = {"references": references, "warnings": warnings, "grouped_by": by, "scores": list(keys),
-              "normalisation": "heuristic, reward, value: 0 = random policy, 1 = scripted expert; "
-                               "subtasks: fraction done; path_length m, time s, smoothness = log dimensionless jerk",
-              "groups": subject_table(grouped, keys), "trajectories": rows, "problems": problems, "ranking": {}}
+    warnings = [
+        f"{k}: the random policy scores above the scripted expert ({references['random'][k]:.4g} vs "
+        f"{references['expert'][k]:.4g}): it is shown raw, not normalised"
+        for k in NORMALISED
+        if k in keys and _inverted(references, k)
+    ]
+    report = {
+        "references": references,
+        "warnings": warnings,
+        "grouped_by": by,
+        "scores": list(keys),
+        "normalisation": "heuristic, reward, value: 0 = random policy, 1 = scripted expert; "
+        "subtasks: fraction done; path_length m, time s, smoothness = log dimensionless jerk",
+        "groups": subject_table(grouped, keys),
+        "trajectories": rows,
+        "problems": problems,
+        "ranking": {},
+    }
     labelled = [r for r in rows if isinstance(r["skill"], int | float)]
     if len({r["skill"] for r in labelled}) > 1:
         for k in keys:

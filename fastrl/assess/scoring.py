@@ -19,9 +19,19 @@ from .tour import tour_metrics
 SCORES = ("heuristic", "reward", "value", "potential", "subtasks", "path_length", "time", "smoothness")
 NORMALISED = ("heuristic", "reward", "value", "potential")  # 0 = random policy, 1 = scripted expert
 LEARNED = ("reward", "value", "potential")  # need a run's networks; potential: shaped AIRL only
-HIGHER_IS_BETTER = {"heuristic": True, "reward": True, "value": True, "potential": True, "subtasks": True,
-                    "path_length": False,
-                    "time": False, "smoothness": True, "economy": False, "safety": True, "contacts": False}
+HIGHER_IS_BETTER = {
+    "heuristic": True,
+    "reward": True,
+    "value": True,
+    "potential": True,
+    "subtasks": True,
+    "path_length": False,
+    "time": False,
+    "smoothness": True,
+    "economy": False,
+    "safety": True,
+    "contacts": False,
+}
 
 
 @dataclass
@@ -30,10 +40,10 @@ class TrajectoryScores:
 
     name: str
     meta: dict
-    scores: dict[str, float]             # SCORES -> raw value (None where no learned model)
-    time: np.ndarray                     # (n,) s, the replayed samples
-    tip: np.ndarray                      # (n, 3) camera (tip) positions
-    values: np.ndarray | None = None     # (n,) learned value of each state
+    scores: dict[str, float]  # SCORES -> raw value (None where no learned model)
+    time: np.ndarray  # (n,) s, the replayed samples
+    tip: np.ndarray  # (n, 3) camera (tip) positions
+    values: np.ndarray | None = None  # (n,) learned value of each state
     normalised: dict[str, float] = field(default_factory=dict)
 
     @property
@@ -95,7 +105,9 @@ class Scorer:
             "path_length": path_length(tip),
             "time": float(time[-1]),
             "smoothness": log_dimensionless_jerk(tip, time),
-            "reward": None, "value": None, "potential": None,
+            "reward": None,
+            "value": None,
+            "potential": None,
         }
         if self.anatomy is not None:
             scores.update(tour_metrics(tip, [i["contacts"] for i in infos], self.anatomy, self.spec.scene.radius))
@@ -106,8 +118,12 @@ class Scorer:
             scores["value"] = float(values.mean())
             if self.networks.has_potential:
                 scores["potential"] = float(self.networks.potential(obs).mean())
-        meta = {**traj.meta, "success": bool(last["success"]), "subtasks_done": int(last["subtask"]),
-                "subtasks_total": int(last["subtasks_total"])}
+        meta = {
+            **traj.meta,
+            "success": bool(last["success"]),
+            "subtasks_done": int(last["subtask"]),
+            "subtasks_total": int(last["subtasks_total"]),
+        }
         return TrajectoryScores(name or str(traj.meta.get("subject", "")), meta, scores, time, tip, values)
 
     def score_file(self, path: Path) -> TrajectoryScores:

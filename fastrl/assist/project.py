@@ -7,8 +7,9 @@ import math
 import numpy as np
 
 
-def project_points(points: np.ndarray, cam_pos: np.ndarray, cam_mat: np.ndarray, fovy_deg: float,
-                   width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+def project_points(
+    points: np.ndarray, cam_pos: np.ndarray, cam_mat: np.ndarray, fovy_deg: float, width: int, height: int
+) -> tuple[np.ndarray, np.ndarray]:
     """Pixel coordinates (n, 2: column, row) of world points and a mask of those in front of the camera."""
     local = (np.asarray(points, float) - cam_pos) @ np.asarray(cam_mat, float).reshape(3, 3)  # right, up, back
     ahead = -local[:, 2]

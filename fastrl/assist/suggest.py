@@ -18,13 +18,13 @@ from ..spec.models import TaskSpec
 class Suggestion:
     """A suggested tip path from one state, and whether it reaches the next avatar."""
 
-    tip: np.ndarray           # (n, 3) tip positions, the start state first
-    portal: np.ndarray        # (n, 5) portal coordinates along the path
-    aim: np.ndarray           # (n, 3) where the optical axis meets the scene (view centre); NaN: meets nothing
-    reached: bool             # the policy completed the current subtask within the horizon
-    reached_at: int | None    # index into tip where the subtask completed
+    tip: np.ndarray  # (n, 3) tip positions, the start state first
+    portal: np.ndarray  # (n, 5) portal coordinates along the path
+    aim: np.ndarray  # (n, 3) where the optical axis meets the scene (view centre); NaN: meets nothing
+    reached: bool  # the policy completed the current subtask within the horizon
+    reached_at: int | None  # index into tip where the subtask completed
     start_subtask: int
-    ms: float                 # wall time to compute
+    ms: float  # wall time to compute
 
 
 class Suggester:
@@ -58,8 +58,9 @@ class Suggester:
             if term:
                 break
         ms = 1000.0 * (time.perf_counter() - t0)
-        return Suggestion(np.array(tips), np.array(coords), np.array(aims), reached_at is not None, reached_at, start,
-                          ms)
+        return Suggestion(
+            np.array(tips), np.array(coords), np.array(aims), reached_at is not None, reached_at, start, ms
+        )
 
     def _aim(self) -> tuple:
         """Where the scratch camera's optical axis meets the scene (NaN if it meets nothing)."""

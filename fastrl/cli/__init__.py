@@ -53,9 +53,7 @@ def load(path: Path, overrides: list[str] | None = None) -> CompiledTask:
         return compile_task(spec)
     except ValueError as e:  # mujoco reports compile errors as ValueError
         detail = " ".join(str(e).split())
-        raise SpecError(
-            [SpecIssue(str(path), None, "", f"MuJoCo cannot compile the model: {detail}")]
-        ) from None
+        raise SpecError([SpecIssue(str(path), None, "", f"MuJoCo cannot compile the model: {detail}")]) from None
 
 
 def report(error: SpecError) -> None:
@@ -104,9 +102,7 @@ def _version(value: bool) -> None:
 def main(
     version: Annotated[
         bool,
-        typer.Option(
-            "--version", callback=_version, is_eager=True, help="print the version and exit"
-        ),
+        typer.Option("--version", callback=_version, is_eager=True, help="print the version and exit"),
     ] = False,
 ) -> None:
     """FAST arthroscopy tasks: YAML specs compiled to MuJoCo, trained and scored as RL."""
@@ -114,9 +110,7 @@ def main(
 
 @app.command()
 def check(
-    specs: Annotated[
-        list[Path], typer.Argument(metavar="SPEC", help="task spec YAML files", show_default=False)
-    ],
+    specs: Annotated[list[Path], typer.Argument(metavar="SPEC", help="task spec YAML files", show_default=False)],
     set_: SetOpt = None,
 ) -> None:
     """Validate and compile task specs; print FILE:LINE errors and exit 2 if any is bad."""
@@ -153,9 +147,7 @@ def schema(
 @app.command(name="compile")
 def compile_(
     spec: SpecArg,
-    output: Annotated[
-        Path, typer.Option("-o", "--output", help="MJCF file to write", show_default=False)
-    ],
+    output: Annotated[Path, typer.Option("-o", "--output", help="MJCF file to write", show_default=False)],
     set_: SetOpt = None,
 ) -> None:
     """Compile a task spec and write the MuJoCo model (MJCF XML)."""
@@ -221,8 +213,10 @@ def run(
 @app.command()
 def irl(
     spec: SpecArg,
-    demos: Annotated[Path | None, typer.Option(metavar="DIR", help="demonstrations (.npz); default: write "
-                                               "scripted-expert ones into the run")] = None,
+    demos: Annotated[
+        Path | None,
+        typer.Option(metavar="DIR", help="demonstrations (.npz); default: write scripted-expert ones into the run"),
+    ] = None,
     algorithm: Annotated[str | None, typer.Option(help="gail, airl or bc (default: the spec's, else airl)")] = None,
     generator: Annotated[str | None, typer.Option(help="PPO or SAC (shortcut for --set train.algo=...)")] = None,
     set_: SetOpt = None,
@@ -243,8 +237,9 @@ def irl(
     train_and_report(spec, overrides, None, runs, progress, timesteps)
 
 
-def train_and_report(spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool,
-                     timesteps: int | None) -> None:
+def train_and_report(
+    spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool, timesteps: int | None
+) -> None:
     """Start (or resume) a run, turn interruptions and bad input into messages, print the evaluation."""
     from ..agents.sb3 import CheckpointMismatch
     from ..runner import EvaluationInterrupted, RunInterrupted, resume_run, start_run
@@ -263,8 +258,9 @@ def train_and_report(spec: Path | None, overrides: list[str], resume: Path | Non
                 return experiment_and_report(spec, overrides, None, runs, progress)
             run_dir = start_run(spec, overrides, runs, out, progress)
     except RunInterrupted as stop:
-        err.print(f"interrupted at {stop.timesteps} timesteps; checkpoint and recording saved in {stop.run}",
-                  markup=False)
+        err.print(
+            f"interrupted at {stop.timesteps} timesteps; checkpoint and recording saved in {stop.run}", markup=False
+        )
         err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
         raise typer.Exit(code=130) from None
     except EvaluationInterrupted as stop:
@@ -289,8 +285,14 @@ def print_eval(results: dict) -> None:
     for who in ("agent", "expert"):
         r = results.get(who)
         if r:
-            table.add_row(who, f"{r['success_rate']:.0%}", f"{r['subtasks_completed']:.1%}",
-                          f"{r['return_mean']:.1f}", f"{r['episode_time_mean']:.1f}", f"{r['path_length_mean']:.3f}")
+            table.add_row(
+                who,
+                f"{r['success_rate']:.0%}",
+                f"{r['subtasks_completed']:.1%}",
+                f"{r['return_mean']:.1f}",
+                f"{r['episode_time_mean']:.1f}",
+                f"{r['path_length_mean']:.3f}",
+            )
     out.print(table)
 
 
@@ -332,13 +334,17 @@ def view(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR", show_default
         subprocess.Popen([viewer, str(rrd)])
         out.print(f"opening {escape(str(rrd))} in the Rerun viewer")
         return
-    out.print(f"no display here: copy {escape(str(rrd))} to a machine with a display and run `rerun {rrd.name}`, "
-              f"or serve it to a browser with `rerun --web-viewer {escape(str(rrd))}`")
+    out.print(
+        f"no display here: copy {escape(str(rrd))} to a machine with a display and run `rerun {rrd.name}`, "
+        f"or serve it to a browser with `rerun --web-viewer {escape(str(rrd))}`"
+    )
 
 
 @app.command(name="runs")
-def runs_(root: RunsOpt = Path("runs"),
-          as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False) -> None:
+def runs_(
+    root: RunsOpt = Path("runs"),
+    as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
+) -> None:
     """List runs with their headline figures, newest first."""
     from rich.table import Table
 
@@ -356,10 +362,17 @@ def runs_(root: RunsOpt = Path("runs"),
         table.add_column(col, overflow="fold")
     for r in rows:
         pct = lambda v: "-" if v is None else f"{v:.0%}"  # noqa: E731
-        table.add_row(str(Path(r["run"]).relative_to(root)), r["spec"] or "?", r["algo"] or "?", str(r["seed"]),
-                      r["status"],
-                      str(r["timesteps"] or "-"), "-" if r["wall_s"] is None else f"{r['wall_s']:.0f}s",
-                      pct(r["success"]), pct(r["subtasks"]))
+        table.add_row(
+            str(Path(r["run"]).relative_to(root)),
+            r["spec"] or "?",
+            r["algo"] or "?",
+            str(r["seed"]),
+            r["status"],
+            str(r["timesteps"] or "-"),
+            "-" if r["wall_s"] is None else f"{r['wall_s']:.0f}s",
+            pct(r["success"]),
+            pct(r["subtasks"]),
+        )
     out.print(table)
 
 

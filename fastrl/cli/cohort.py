@@ -32,8 +32,9 @@ def cohort(
         raise typer.Exit(code=2)
     task = load_or_exit(spec, set_)
     if task.spec.actions.mode != "discrete":
-        err.print(f"{spec}: synthetic trainees act with discrete actions; use --set actions.mode=discrete",
-                  markup=False)
+        err.print(
+            f"{spec}: synthetic trainees act with discrete actions; use --set actions.mode=discrete", markup=False
+        )
         raise typer.Exit(code=2)
     env = FastEnv(task.spec)
     rows = []
@@ -59,6 +60,11 @@ def print_levels(table: list[dict], name: str) -> None:
     for col in ("level", "n", "heuristic return", "subtasks", "duration (s)"):
         t.add_column(col, justify="right")
     for e in table:
-        t.add_row(str(e["skill"]), str(e["n"]), f"{e['return']:.1f} ± {e['return_sd']:.1f}",
-                  f"{e['subtasks']:.1f} ± {e['subtasks_sd']:.1f}", f"{e['duration']:.1f} ± {e['duration_sd']:.1f}")
+        t.add_row(
+            str(e["skill"]),
+            str(e["n"]),
+            f"{e['return']:.1f} ± {e['return_sd']:.1f}",
+            f"{e['subtasks']:.1f} ± {e['subtasks_sd']:.1f}",
+            f"{e['duration']:.1f} ± {e['duration_sd']:.1f}",
+        )
     out.print(t)

@@ -16,22 +16,27 @@ def is_experiment(run: Path) -> bool:
     """Whether a run directory holds an experiment (its experiment.json, or meta.json kind)."""
     meta = run / "meta.json"
     return (run / "experiment.json").exists() or (
-        meta.exists() and json.loads(meta.read_text()).get("kind") == "experiment")
+        meta.exists() and json.loads(meta.read_text()).get("kind") == "experiment"
+    )
 
 
-def experiment_and_report(spec: Path | None, overrides: list[str], resume: Path | None, runs: Path,
-                          progress: bool) -> None:
+def experiment_and_report(
+    spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool
+) -> None:
     """Run (or continue) the spec's experiment and print its Table 3."""
     from ..runner import RunInterrupted
     from ..runner.experiment import run_experiment, start_experiment
 
     try:
-        run_dir = run_experiment(resume, out, progress) if resume else start_experiment(spec, overrides, runs, out,
-                                                                                        progress)
+        run_dir = (
+            run_experiment(resume, out, progress) if resume else start_experiment(spec, overrides, runs, out, progress)
+        )
     except RunInterrupted as stop:
         run_dir = stop.run.parent
-        err.print(f"interrupted in {stop.run.name} at {stop.timesteps} timesteps; what is done is saved in "
-                  f"{run_dir}", markup=False)
+        err.print(
+            f"interrupted in {stop.run.name} at {stop.timesteps} timesteps; what is done is saved in {run_dir}",
+            markup=False,
+        )
         err.print(f"continue with: fastrl run --resume {run_dir}", markup=False)
         raise typer.Exit(code=130) from None
     except KeyboardInterrupt:
@@ -40,8 +45,10 @@ def experiment_and_report(spec: Path | None, overrides: list[str], resume: Path 
     except (SpecError, FileNotFoundError) as e:
         exit_with(e)
     print_table3(json.loads((run_dir / "experiment.json").read_text()))
-    out.print(f"experiment saved in {escape(str(run_dir))}: experiment.json, table3.png; "
-              f"view it with: rerun {escape(str(run_dir / 'recording.rrd'))}")
+    out.print(
+        f"experiment saved in {escape(str(run_dir))}: experiment.json, table3.png; "
+        f"view it with: rerun {escape(str(run_dir / 'recording.rrd'))}"
+    )
 
 
 def print_table3(result: dict) -> None:
@@ -53,8 +60,9 @@ def print_table3(result: dict) -> None:
     def cell(c: dict) -> str:
         return "-" if c["rho"] is None else f"{c['rho']:.2f} ({c['p']:.0e})"
 
-    table = Table(title=f"learned scores of {result['n']} procedures against economy and safety "
-                        f"(Spearman's rho, p-value)")
+    table = Table(
+        title=f"learned scores of {result['n']} procedures against economy and safety (Spearman's rho, p-value)"
+    )
     table.add_column("model", no_wrap=True, min_width=9)
     for k, m in PANELS:
         table.add_column(f"{k}\nvs {m}", justify="right", no_wrap=True)

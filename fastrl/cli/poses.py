@@ -15,18 +15,22 @@ from . import SpecArg, app, err, load_or_exit, out
 def import_poses_(
     spec: SpecArg,
     csv_file: Annotated[Path, typer.Argument(metavar="FILE.csv", help="tracked scope poses", show_default=False)],
-    output: Annotated[Path | None, typer.Option("-o", "--output", help="trajectory to write (default: FILE.npz)",
-                                                show_default=False)] = None,
+    output: Annotated[
+        Path | None, typer.Option("-o", "--output", help="trajectory to write (default: FILE.npz)", show_default=False)
+    ] = None,
     subject: Annotated[str | None, typer.Option(help="who held the scope")] = None,
-    skill: Annotated[str | None, typer.Option(
-        help="skill label, if known: a number (higher = more skilled) is ranked by `fastrl score`")] = None,
+    skill: Annotated[
+        str | None,
+        typer.Option(help="skill label, if known: a number (higher = more skilled) is ranked by `fastrl score`"),
+    ] = None,
     source: Annotated[str, typer.Option(help="agent, expert, human or synthetic")] = "human",
     seed: Annotated[int | None, typer.Option(help="episode seed for replay (avatar jitter of the session)")] = None,
     tolerance_mm: Annotated[float, typer.Option(help="how far the shaft axis may miss the portal point")] = 2.0,
     tolerance_deg: Annotated[float, typer.Option(help="how far the orientation may tilt from portal -> tip")] = 5.0,
     max_rejected: Annotated[float, typer.Option(help="largest fraction of samples that may be rejected")] = 0.2,
-    resample: Annotated[bool, typer.Option(help="resample to the spec's control rate (replay takes one "
-                                           "sample per control step)")] = True,
+    resample: Annotated[
+        bool, typer.Option(help="resample to the spec's control rate (replay takes one sample per control step)")
+    ] = True,
 ) -> None:
     """Convert tracked scope poses (CSV) into a trajectory through inverse portal kinematics."""
     from ..data import TrajectoryError
@@ -34,8 +38,9 @@ def import_poses_(
 
     task = load_or_exit(spec)
     meta = {"source": source}
-    meta.update({k: v for k, v in (("subject", subject), ("skill", _number_or_text(skill)), ("seed", seed))
-                 if v is not None})
+    meta.update(
+        {k: v for k, v in (("subject", subject), ("skill", _number_or_text(skill)), ("seed", seed)) if v is not None}
+    )
     hz = task.spec.episode.control_hz if resample else None
     try:
         traj, report = import_poses(task, csv_file, meta, tolerance_mm, tolerance_deg, max_rejected, hz)
@@ -55,8 +60,10 @@ def import_poses_(
     except OSError as e:
         err.print(f"cannot write {target}: {e.strerror or e}", markup=False)
         raise typer.Exit(code=1) from None
-    out.print(f"wrote {escape(str(target))}  ({len(traj.time)} samples, {traj.time[-1]:.2f} s, "
-              f"source {escape(str(traj.meta['source']))})")
+    out.print(
+        f"wrote {escape(str(target))}  ({len(traj.time)} samples, {traj.time[-1]:.2f} s, "
+        f"source {escape(str(traj.meta['source']))})"
+    )
 
 
 def _number_or_text(label: str | None):

@@ -14,15 +14,26 @@ from . import app, err, exit_with, out
 
 @app.command()
 def score(
-    inputs: Annotated[list[Path], typer.Argument(metavar="TRAJ_OR_DIR...", help="trajectory .npz files or folders",
-                                                 show_default=False)],
-    run: Annotated[Path | None, typer.Option("--run", metavar="RUN_DIR",
-                                             help="a run: its spec, and after inverse RL its learned reward and value")
-                   ] = None,
-    spec: Annotated[Path | None, typer.Option("--spec", metavar="SPEC",
-                                              help="score without a run (heuristic and kinematic scores only)")] = None,
-    output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON report (CSV, PNGs and .rrd beside it; "
-                                                "default RUN_DIR/assessment/scores.json)")] = None,
+    inputs: Annotated[
+        list[Path],
+        typer.Argument(metavar="TRAJ_OR_DIR...", help="trajectory .npz files or folders", show_default=False),
+    ],
+    run: Annotated[
+        Path | None,
+        typer.Option(
+            "--run", metavar="RUN_DIR", help="a run: its spec, and after inverse RL its learned reward and value"
+        ),
+    ] = None,
+    spec: Annotated[
+        Path | None,
+        typer.Option("--spec", metavar="SPEC", help="score without a run (heuristic and kinematic scores only)"),
+    ] = None,
+    output: Annotated[
+        Path | None,
+        typer.Option(
+            "-o", "--output", help="JSON report (CSV, PNGs and .rrd beside it; default RUN_DIR/assessment/scores.json)"
+        ),
+    ] = None,
     references: Annotated[int, typer.Option(help="episodes per normalisation reference")] = 3,
     pictures: Annotated[bool, typer.Option(help="write the PNG figures and the Rerun recording")] = True,
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
@@ -35,8 +46,16 @@ def score(
         err.print("give --run RUN_DIR, or --spec SPEC", markup=False)
         raise typer.Exit(code=2)
     try:
-        result = assess(inputs, run=run, spec_path=spec, output=output, reference_episodes=references,
-                        pictures=pictures, console=err, progress=progress)
+        result = assess(
+            inputs,
+            run=run,
+            spec_path=spec,
+            output=output,
+            reference_episodes=references,
+            pictures=pictures,
+            console=err,
+            progress=progress,
+        )
     except (SpecError, FileNotFoundError, ValueError) as e:
         exit_with(e)
     report = result.report
@@ -49,8 +68,7 @@ def score(
         raise typer.Exit(code=2)
     print_report(report)
     n, secs = len(report["trajectories"]), result.seconds["scoring"]
-    out.print(f"scored {n} trajectories in {secs:.2f} s (replay included); "
-              f"{len(report['problems'])} skipped")
+    out.print(f"scored {n} trajectories in {secs:.2f} s (replay included); {len(report['problems'])} skipped")
     for kind, path in result.files.items():
         out.print(f"  {kind}: {escape(str(path))}")
 
@@ -64,8 +82,9 @@ def print_report(report: dict) -> None:
     for k in keys:
         table.add_column(k, justify="right")
     for g in report["groups"]:
-        table.add_row(str(g["subject"]), str(g["n"]),
-                      *["-" if g[k] is None else f"{g[k]:.3g} ± {g[k + '_sd']:.2g}" for k in keys])
+        table.add_row(
+            str(g["subject"]), str(g["n"]), *["-" if g[k] is None else f"{g[k]:.3g} ± {g[k + '_sd']:.2g}" for k in keys]
+        )
     out.print(table)
     out.print(report["normalisation"], style="dim")
     if report["ranking"]:
@@ -73,8 +92,12 @@ def print_report(report: dict) -> None:
         for col in ("score", "Spearman rho [95% CI]", "Kendall tau-b [95% CI]", "levels in order"):
             rank.add_column(col)
         for k, r in report["ranking"].items():
-            rank.add_row(k, _stat(r["spearman"], r["spearman_ci"]), _stat(r["kendall_tau_b"], r["kendall_ci"]),
-                         "yes" if r["levels_in_order"] else "no")
+            rank.add_row(
+                k,
+                _stat(r["spearman"], r["spearman_ci"]),
+                _stat(r["kendall_tau_b"], r["kendall_ci"]),
+                "yes" if r["levels_in_order"] else "no",
+            )
         out.print(rank)
 
 

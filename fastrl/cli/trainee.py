@@ -10,14 +10,21 @@ from rich.markup import escape
 
 from . import SetOpt, SpecArg, app, err, exit_with, out
 
-RunOpt = Annotated[Path | None, typer.Option("--assist", metavar="RUN_DIR",
-                                             help="a trained run: path suggestions (Enter) and its value as the cue")]
+RunOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--assist", metavar="RUN_DIR", help="a trained run: path suggestions (Enter) and its value as the cue"
+    ),
+]
 
 
 def _no_display(e: Exception) -> None:
     """Exit 2 with a hint when no window can be opened."""
-    err.print(f"cannot open the viewer window ({e}); on a machine without a screen run under "
-              "`xvfb-run -a -s '-screen 0 1280x800x24'` with MUJOCO_GL=egl", markup=False)
+    err.print(
+        f"cannot open the viewer window ({e}); on a machine without a screen run under "
+        "`xvfb-run -a -s '-screen 0 1280x800x24'` with MUJOCO_GL=egl",
+        markup=False,
+    )
     raise typer.Exit(code=2)
 
 
@@ -26,12 +33,14 @@ def record(
     spec: SpecArg,
     subject: Annotated[str, typer.Option("--subject", help="who is recorded (saved in the trajectory)")],
     output: Annotated[Path, typer.Option("-o", "--output", metavar="DIR", help="folder for the attempts")] = Path(
-        "recordings"),
+        "recordings"
+    ),
     assist: RunOpt = None,
     seed: Annotated[int, typer.Option(help="task seed (avatar jitter, start pose)")] = 0,
     overrides: SetOpt = None,
-    linger: Annotated[float, typer.Option(help="seconds the feedback stays on screen (negative: until the window "
-                                                 "is closed)")] = -1.0,
+    linger: Annotated[
+        float, typer.Option(help="seconds the feedback stays on screen (negative: until the window is closed)")
+    ] = -1.0,
     suggest_every: Annotated[float | None, typer.Option(help="also suggest a path every this many seconds")] = None,
     feedback: Annotated[bool, typer.Option(help="score the attempt when it ends")] = True,
 ) -> None:
@@ -41,8 +50,17 @@ def record(
 
     try:
         task_spec = load_spec(spec, overrides or ())
-        result = run_record(task_spec, subject, output, assist, seed, linger=linger, feedback=feedback,
-                            suggest_every=suggest_every, say=lambda m: err.print(m, markup=False))
+        result = run_record(
+            task_spec,
+            subject,
+            output,
+            assist,
+            seed,
+            linger=linger,
+            feedback=feedback,
+            suggest_every=suggest_every,
+            say=lambda m: err.print(m, markup=False),
+        )
     except (SpecError, FileNotFoundError, ValueError) as e:
         exit_with(e)
     except Exception as e:  # GLFW / mujoco.FatalError without a display
@@ -52,8 +70,10 @@ def record(
     t = result["timing"]
     out.print(f"saved {escape(str(result['path']))} ({result['end']})")
     if "period_ms_mean" in t:
-        out.print(f"control loop: {t['period_ms_mean']:.1f} ms mean period (target {t['control_period_ms']:.0f}), "
-                  f"{t['work_ms_mean']:.1f} ms work, {t['late_ticks']} late ticks")
+        out.print(
+            f"control loop: {t['period_ms_mean']:.1f} ms mean period (target {t['control_period_ms']:.0f}), "
+            f"{t['work_ms_mean']:.1f} ms work, {t['late_ticks']} late ticks"
+        )
     if "rrd" in result:
         out.print(f"rerun: {escape(str(result['rrd']))}")
 
@@ -62,8 +82,9 @@ def record(
 def replay(
     file: Annotated[Path, typer.Argument(metavar="FILE", help="a recorded trajectory (.npz)", show_default=False)],
     spec: Annotated[Path | None, typer.Option("--spec", help="the spec, if the file does not carry it")] = None,
-    output: Annotated[Path | None, typer.Option("-o", "--output", help="Rerun recording (default FILE.replay.rrd)")
-                      ] = None,
+    output: Annotated[
+        Path | None, typer.Option("-o", "--output", help="Rerun recording (default FILE.replay.rrd)")
+    ] = None,
     viewer: Annotated[bool, typer.Option(help="play it in the MuJoCo viewer too")] = True,
     speed: Annotated[float, typer.Option(help="playback speed in the viewer")] = 1.0,
 ) -> None:
@@ -77,8 +98,12 @@ def replay(
         traj = Trajectory.load(file)
         task_spec = spec_of_trajectory(traj, spec)
         fb = traj.meta.get("feedback")
-        rrd = attempt_recording(task_spec, traj, output or file.with_suffix(".replay.rrd"),
-                                feedback_md=markdown_feedback(fb) if fb else None)
+        rrd = attempt_recording(
+            task_spec,
+            traj,
+            output or file.with_suffix(".replay.rrd"),
+            feedback_md=markdown_feedback(fb) if fb else None,
+        )
     except (SpecError, TrajectoryError, FileNotFoundError, ValueError) as e:
         exit_with(e)
     out.print(f"rerun: {escape(str(rrd))}")
@@ -96,8 +121,9 @@ def replay(
 def assist_cmd(
     run: Annotated[Path, typer.Argument(metavar="RUN_DIR", help="a trained run (networks/)", show_default=False)],
     file: Annotated[Path, typer.Argument(metavar="TRAJ", help="a recorded trajectory (.npz)", show_default=False)],
-    output: Annotated[Path | None, typer.Option("-o", "--output", help="Rerun recording (default TRAJ.assist.rrd)")
-                      ] = None,
+    output: Annotated[
+        Path | None, typer.Option("-o", "--output", help="Rerun recording (default TRAJ.assist.rrd)")
+    ] = None,
     every: Annotated[float, typer.Option(help="seconds between suggestions")] = 1.0,
 ) -> None:
     """Assist a recorded attempt offline: suggestions at regular points and the value along the way, in Rerun."""
@@ -115,8 +141,9 @@ def assist_cmd(
             raise TrajectoryError(f"{file}: {problem}")
         fb = traj.meta.get("feedback")
         text = markdown_feedback(fb) if fb else None
-        rrd = attempt_recording(task_spec, traj, output or file.with_suffix(".assist.rrd"), run, every_s=every,
-                                feedback_md=text)
+        rrd = attempt_recording(
+            task_spec, traj, output or file.with_suffix(".assist.rrd"), run, every_s=every, feedback_md=text
+        )
     except (SpecError, TrajectoryError, FileNotFoundError, ValueError) as e:
         exit_with(e)
     out.print(f"rerun: {escape(str(rrd))}")

@@ -19,8 +19,14 @@ def subject_name(level: int, index: int) -> str:
     return f"L{level}-S{index:02d}"
 
 
-def make_cohort(spec: TaskSpec, levels: int, per_level: int, seed: int = 0, novice: SkillProfile = NOVICE,
-                env: FastEnv | None = None) -> Iterator[Trajectory]:
+def make_cohort(
+    spec: TaskSpec,
+    levels: int,
+    per_level: int,
+    seed: int = 0,
+    novice: SkillProfile = NOVICE,
+    env: FastEnv | None = None,
+) -> Iterator[Trajectory]:
     """Yield per_level trajectories for each level 1..levels (seeds seed, seed+1, ... in that order)."""
     profiles = [profile_for_level(level, levels, novice) for level in range(1, levels + 1)]
     if per_level < 1:
@@ -30,8 +36,13 @@ def make_cohort(spec: TaskSpec, levels: int, per_level: int, seed: int = 0, novi
         for i in range(per_level):
             s = seed + (level - 1) * per_level + i
             trainee = Trainee(env, profile, s)
-            meta = {"source": "synthetic", "subject": subject_name(level, i + 1), "skill": level, "levels": levels,
-                    "profile": profile.as_dict()}
+            meta = {
+                "source": "synthetic",
+                "subject": subject_name(level, i + 1),
+                "skill": level,
+                "levels": levels,
+                "profile": profile.as_dict(),
+            }
             yield rollout_trajectory(env, trainee.act, s, meta, trainee.reset)[0]
 
 

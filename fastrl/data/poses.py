@@ -15,7 +15,7 @@ from .trajectory import Trajectory
 
 COLUMNS = ("time", "x", "y", "z", "qw", "qx", "qy", "qz", "cable")  # s, m (x3), quaternion wxyz, rad
 QUAT_NORM_TOLERANCE = 0.01  # |norm - 1| above this is not a rotation
-RANGE_SLACK = 1e-3          # rad or m past a joint limit still accepted (then clipped), as soft limits allow
+RANGE_SLACK = 1e-3  # rad or m past a joint limit still accepted (then clipped), as soft limits allow
 REASONS = {
     "non_finite": "missing or non-finite value",
     "quaternion": f"quaternion norm differs from 1 by more than {QUAT_NORM_TOLERANCE}",
@@ -48,9 +48,15 @@ class PoseReport:
     def lines(self, labels=None, unit: str = "rows", first: int = 5) -> list[str]:
         """Human-readable summary; labels maps a row index to what to print (e.g. its CSV line)."""
         label = (lambda i: str(labels[i])) if labels is not None else (lambda i: str(i + 1))
-        out = [f"{self.kept} of {self.rows} samples kept, {self.rows - self.kept} rejected"
-               + (f"; kept samples: axis misses the portal by <= {self.max_miss_mm:.2f} mm, "
-                  f"axis angle <= {self.max_angle_deg:.2f} deg" if self.kept else "")]
+        out = [
+            f"{self.kept} of {self.rows} samples kept, {self.rows - self.kept} rejected"
+            + (
+                f"; kept samples: axis misses the portal by <= {self.max_miss_mm:.2f} mm, "
+                f"axis angle <= {self.max_angle_deg:.2f} deg"
+                if self.kept
+                else ""
+            )
+        ]
         for reason, rows in self.rejected.items():
             shown = ", ".join(label(i) for i in rows[:first]) + (", ..." if len(rows) > first else "")
             out.append(f"  {len(rows)} x {REASONS[reason]} ({reason}): {unit} {shown}")
@@ -63,8 +69,9 @@ def poses_from_portal(task, time: np.ndarray, portal: np.ndarray) -> np.ndarray:
     return np.column_stack([time, tip, mat_to_quat(rot), wrap(np.asarray(portal, float)[:, 4])])
 
 
-def portal_from_poses(task, poses: np.ndarray, tolerance_mm: float = 2.0, tolerance_deg: float = 5.0,
-                      max_rejected: float = 0.2) -> tuple[np.ndarray, np.ndarray, PoseReport]:
+def portal_from_poses(
+    task, poses: np.ndarray, tolerance_mm: float = 2.0, tolerance_deg: float = 5.0, max_rejected: float = 0.2
+) -> tuple[np.ndarray, np.ndarray, PoseReport]:
     """Times (K,), portal coordinates (K, 5) of the consistent rows of a pose table, and the report.
 
     Rejected rows are dropped; PoseError if fewer than 2 remain or more than max_rejected of them go.
@@ -93,12 +100,17 @@ def portal_from_poses(task, poses: np.ndarray, tolerance_mm: float = 2.0, tolera
             bad["time"][i], ok[i] = True, False
         else:
             last = poses[i, 0]
-    report = PoseReport(n, int(ok.sum()), {k: np.flatnonzero(v).tolist() for k, v in bad.items() if v.any()},
-                        float(miss[ok].max() * 1000) if ok.any() else 0.0,
-                        float(np.degrees(angle[ok].max())) if ok.any() else 0.0)
+    report = PoseReport(
+        n,
+        int(ok.sum()),
+        {k: np.flatnonzero(v).tolist() for k, v in bad.items() if v.any()},
+        float(miss[ok].max() * 1000) if ok.any() else 0.0,
+        float(np.degrees(angle[ok].max())) if ok.any() else 0.0,
+    )
     if report.kept < 2 or n - report.kept > max_rejected * n:
-        raise PoseError(f"{n - report.kept} of {n} samples rejected (at most {max_rejected:.0%} may be, "
-                        f"and 2 must remain)", report)
+        raise PoseError(
+            f"{n - report.kept} of {n} samples rejected (at most {max_rejected:.0%} may be, and 2 must remain)", report
+        )
     portal = np.column_stack([q4[ok], wrap(poses[ok, 8])])
     portal[:, :3] = np.clip(portal[:, :3], task.ranges[:3, 0], task.ranges[:3, 1])
     return poses[ok, 0], portal, report
@@ -154,8 +166,15 @@ def _number(cell: str, path: Path, line: int, column: str) -> float:
         raise PoseError(f"{path}:{line}: column {column!r}: {cell!r} is not a number") from None
 
 
-def import_poses(task, path: Path, meta: dict, tolerance_mm: float = 2.0, tolerance_deg: float = 5.0,
-                 max_rejected: float = 0.2, resample_hz: float | None = None) -> tuple[Trajectory, list[str]]:
+def import_poses(
+    task,
+    path: Path,
+    meta: dict,
+    tolerance_mm: float = 2.0,
+    tolerance_deg: float = 5.0,
+    max_rejected: float = 0.2,
+    resample_hz: float | None = None,
+) -> tuple[Trajectory, list[str]]:
     """A Trajectory from a pose CSV, and the report lines; PoseError (with the report) if it cannot be made."""
     path = Path(path)
     poses, lines = read_pose_csv(path)
@@ -168,9 +187,16 @@ def import_poses(task, path: Path, meta: dict, tolerance_mm: float = 2.0, tolera
         raw = len(time)
         time, portal = resample(time, portal, resample_hz)
         text.append(f"resampled {raw} samples to {len(time)} at {resample_hz:g} Hz (one per control step)")
-    meta = {"spec": task.spec.name, "spec_hash": spec_hash(task.spec), "task_hash": task_hash(task.spec),
-            "source": "human", "imported_from": path.name, "samples": report.rows,
-            "rejected": report.rows - report.kept,
-            "rejected_by_reason": {k: len(v) for k, v in report.rejected.items()},
-            "time_offset": float(time[0]), **meta}
+    meta = {
+        "spec": task.spec.name,
+        "spec_hash": spec_hash(task.spec),
+        "task_hash": task_hash(task.spec),
+        "source": "human",
+        "imported_from": path.name,
+        "samples": report.rows,
+        "rejected": report.rows - report.kept,
+        "rejected_by_reason": {k: len(v) for k, v in report.rejected.items()},
+        "time_offset": float(time[0]),
+        **meta,
+    }
     return Trajectory(time - time[0], portal, meta), text

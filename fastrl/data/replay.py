@@ -13,8 +13,9 @@ from .episode import EpisodeRecord
 from .trajectory import Trajectory
 
 
-def rollout_trajectory(env, policy: Callable, seed: int, meta: dict,
-                       on_reset: Callable | None = None) -> tuple[Trajectory, np.ndarray]:
+def rollout_trajectory(
+    env, policy: Callable, seed: int, meta: dict, on_reset: Callable | None = None
+) -> tuple[Trajectory, np.ndarray]:
     """Run one episode and keep its portal coordinates and actions; also return the observations."""
     u = env.unwrapped
     obs, _ = env.reset(seed=seed)
@@ -30,9 +31,15 @@ def rollout_trajectory(env, policy: Callable, seed: int, meta: dict,
         coords.append(u.portal_coordinates())
         observations.append(obs)
         done = term or trunc
-    meta = {"spec": u.task_spec.name, "spec_hash": spec_hash(u.task_spec),
-            "task_hash": task_hash(u.task_spec), "seed": seed,
-            "subtasks": info["subtask"], "subtasks_total": info["subtasks_total"], **meta}
+    meta = {
+        "spec": u.task_spec.name,
+        "spec_hash": spec_hash(u.task_spec),
+        "task_hash": task_hash(u.task_spec),
+        "seed": seed,
+        "subtasks": info["subtask"],
+        "subtasks_total": info["subtasks_total"],
+        **meta,
+    }
     return Trajectory(np.array(times), np.array(coords), meta, np.array(actions)), np.array(observations)
 
 
@@ -110,8 +117,9 @@ def cue_events(infos: list[dict]) -> list[list]:
     return events
 
 
-def replay_episode(env, traj: Trajectory, image_every: int = 0,
-                   on_step: Callable | None = None) -> tuple[EpisodeRecord, np.ndarray]:
+def replay_episode(
+    env, traj: Trajectory, image_every: int = 0, on_step: Callable | None = None
+) -> tuple[EpisodeRecord, np.ndarray]:
     """A trajectory replayed as an EpisodeRecord (and its observations); `on_step(step, env)` sees each state."""
     u = env.unwrapped
     obs, info = u.reset(seed=int(traj.meta.get("seed", 0)), options={"portal": traj.portal[0]})
@@ -122,8 +130,20 @@ def replay_episode(env, traj: Trajectory, image_every: int = 0,
     def snapshot(reward: float, info: dict, obs) -> None:
         s = u.state
         axis = u.data.xmat[shaft].reshape(3, 3)[:, 2]
-        rows.append((s.time, s.portal, s.tip_pos, s.tip_quat, u.data.xpos[shaft] - length * axis, reward,
-                     list(info["features"].values()), info["subtask"], info["cue"]["green"], info["contacts"]))
+        rows.append(
+            (
+                s.time,
+                s.portal,
+                s.tip_pos,
+                s.tip_quat,
+                u.data.xpos[shaft] - length * axis,
+                reward,
+                list(info["features"].values()),
+                info["subtask"],
+                info["cue"]["green"],
+                info["contacts"],
+            )
+        )
         observations.append(obs)
         step = len(rows) - 1
         if image_every and step % image_every == 0:
@@ -141,9 +161,20 @@ def replay_episode(env, traj: Trajectory, image_every: int = 0,
     names = u.feature_names
     feats = np.array(cols[6], float).reshape(len(rows), len(names))
     ep = EpisodeRecord(
-        seed=int(traj.meta.get("seed", 0)), time=np.array(cols[0]), portal=np.array(cols[1]),
-        tip_pos=np.array(cols[2]), tip_quat=np.array(cols[3]), shaft_end=np.array(cols[4]), reward=np.array(cols[5]),
-        features={n: feats[:, i] for i, n in enumerate(names)}, subtask=np.array(cols[7]),
-        green=np.array(cols[8], bool), contacts=np.array(cols[9]), actions=traj.actions, images=images,
-        subtasks_total=info["subtasks_total"], success=bool(info["success"]))
+        seed=int(traj.meta.get("seed", 0)),
+        time=np.array(cols[0]),
+        portal=np.array(cols[1]),
+        tip_pos=np.array(cols[2]),
+        tip_quat=np.array(cols[3]),
+        shaft_end=np.array(cols[4]),
+        reward=np.array(cols[5]),
+        features={n: feats[:, i] for i, n in enumerate(names)},
+        subtask=np.array(cols[7]),
+        green=np.array(cols[8], bool),
+        contacts=np.array(cols[9]),
+        actions=traj.actions,
+        images=images,
+        subtasks_total=info["subtasks_total"],
+        success=bool(info["success"]),
+    )
     return ep, np.array(observations)

@@ -12,12 +12,12 @@ class SkillProfile:
     """How a trainee deviates from the scripted expert; every parameter 0 is the expert."""
 
     motor_noise: float = 0.0  # probability that a step's action is replaced by a random movement
-    tremor: float = 0.0       # amplitude (pitch and yaw increments) of a 2 Hz oscillation added to the moves
-    delay: float = 0.0        # reaction delay (s): pose and current subtask are seen this late
-    overshoot: float = 0.0    # mean extra increments past a coordinate's goal before correcting
-    hesitation: float = 0.0   # probability per step of starting an idle pause (about 0.5 s)
-    wander: float = 0.0       # probability of a random search sweep instead of a direct move, target out of view
-    optics: float = 0.0       # probability per subtask of solving the view by moving the shaft, not the cable
+    tremor: float = 0.0  # amplitude (pitch and yaw increments) of a 2 Hz oscillation added to the moves
+    delay: float = 0.0  # reaction delay (s): pose and current subtask are seen this late
+    overshoot: float = 0.0  # mean extra increments past a coordinate's goal before correcting
+    hesitation: float = 0.0  # probability per step of starting an idle pause (about 0.5 s)
+    wander: float = 0.0  # probability of a random search sweep instead of a direct move, target out of view
+    optics: float = 0.0  # probability per subtask of solving the view by moving the shaft, not the cable
 
     def __post_init__(self):
         for f in fields(self):
@@ -41,8 +41,7 @@ PARAMETERS = tuple(f.name for f in fields(SkillProfile))
 
 # Level 1 of a cohort; level l of L scales every parameter by (L - l) / (L - 1), down to 0 (the expert).
 # Tuned so that the heuristic return separates 5 levels on the bundled tasks (bench/cohort_levels.py).
-NOVICE = SkillProfile(motor_noise=0.18, tremor=0.4, delay=0.2, overshoot=2.0, hesitation=0.04, wander=0.15,
-                      optics=0.6)
+NOVICE = SkillProfile(motor_noise=0.18, tremor=0.4, delay=0.2, overshoot=2.0, hesitation=0.04, wander=0.15, optics=0.6)
 
 
 def skill_gap(level: int, levels: int) -> float:

@@ -10,13 +10,13 @@ import numpy as np
 from ..agents.expert import ScriptedExpert
 from .skill import SkillProfile
 
-TREMOR_HZ = 2.0                                   # oscillation of the tremor (control runs at 20 Hz)
-FINE = 3.0                                        # within FINE + lag increments of the goal: move, then wait
-PAUSE_STEPS = 8                                   # mean length of a hesitation pause beyond its first step
-SWEEP_STEPS = (5, 20)                             # length of a search sweep, or of a committed direct move
-SEARCH_MOVES = (1, 2, 3, 4, 9, 10)                # pitch, yaw and light cable: what sweeps the view round
-SHAFT_HABIT = (0.0, 2.0)                          # (pivot, cable) weights of a view solved by moving the shaft
-REACHED = 0.6                                     # |error| below this many increments: the coordinate is there
+TREMOR_HZ = 2.0  # oscillation of the tremor (control runs at 20 Hz)
+FINE = 3.0  # within FINE + lag increments of the goal: move, then wait
+PAUSE_STEPS = 8  # mean length of a hesitation pause beyond its first step
+SWEEP_STEPS = (5, 20)  # length of a search sweep, or of a committed direct move
+SEARCH_MOVES = (1, 2, 3, 4, 9, 10)  # pitch, yaw and light cable: what sweeps the view round
+SHAFT_HABIT = (0.0, 2.0)  # (pivot, cable) weights of a view solved by moving the shaft
+REACHED = 0.6  # |error| below this many increments: the coordinate is there
 
 
 class Trainee:

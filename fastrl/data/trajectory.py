@@ -21,8 +21,8 @@ class TrajectoryError(ValueError):
 class Trajectory:
     """Portal coordinates over time; observations and features are recomputed by replay."""
 
-    time: np.ndarray                 # (T,) seconds, increasing
-    portal: np.ndarray               # (T, 5) [pitch, yaw, insertion, roll, cable]
+    time: np.ndarray  # (T,) seconds, increasing
+    portal: np.ndarray  # (T, 5) [pitch, yaw, insertion, roll, cable]
     meta: dict = field(default_factory=dict)  # spec, spec_hash, subject, skill, source, seed, ...
     actions: np.ndarray | None = None  # (T-1, ...) actions between samples, where known
 

@@ -10,16 +10,34 @@ from gymnasium import spaces
 
 from ..spec.models import Actions
 
-DISCRETE_MEANINGS = ("noop", "pitch+", "pitch-", "yaw+", "yaw-", "insert", "retract",
-                     "roll+", "roll-", "cable+", "cable-")
+DISCRETE_MEANINGS = (
+    "noop",
+    "pitch+",
+    "pitch-",
+    "yaw+",
+    "yaw-",
+    "insert",
+    "retract",
+    "roll+",
+    "roll-",
+    "cable+",
+    "cable-",
+)
 
 
 class DiscreteActions:
     """Discrete(11): no-op, or plus/minus one step on one portal coordinate."""
 
     def __init__(self, cfg: Actions, ranges: np.ndarray):
-        steps = np.array([math.radians(cfg.pivot_step_deg), math.radians(cfg.pivot_step_deg), cfg.insertion_step,
-                          math.radians(cfg.roll_step_deg), math.radians(cfg.cable_step_deg)])
+        steps = np.array(
+            [
+                math.radians(cfg.pivot_step_deg),
+                math.radians(cfg.pivot_step_deg),
+                cfg.insertion_step,
+                math.radians(cfg.roll_step_deg),
+                math.radians(cfg.cable_step_deg),
+            ]
+        )
         self.space = spaces.Discrete(11)
         self.table = np.zeros((11, 5))
         for k in range(5):
@@ -98,8 +116,15 @@ class RateActions:
 
     def __init__(self, cfg: Actions, ranges: np.ndarray, dt: float):
         self.space = spaces.Box(-1.0, 1.0, (5,), np.float32)
-        self.step = dt * np.array([math.radians(cfg.max_pivot_rate_deg), math.radians(cfg.max_pivot_rate_deg),
-                                   cfg.max_insertion_rate, math.radians(cfg.max_roll_rate_deg), cfg.max_cable_rate])
+        self.step = dt * np.array(
+            [
+                math.radians(cfg.max_pivot_rate_deg),
+                math.radians(cfg.max_pivot_rate_deg),
+                cfg.max_insertion_rate,
+                math.radians(cfg.max_roll_rate_deg),
+                cfg.max_cable_rate,
+            ]
+        )
         self.lead = 3.0 * self.step
         self.lo, self.hi = ranges[:, 0], ranges[:, 1]
 

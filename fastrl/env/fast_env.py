@@ -43,8 +43,12 @@ class FastEnv(gym.Env):
             self.actions = ContinuousActions(spec.actions, ranges, self.dt, self.model.body("scope_optics").id)
         self.action_space = self.actions.space
         self.feature_names = list(spec.reward.features)
-        self.feature_fns = [partial(REWARD_FEATURES[n].fn, **spec.reward.features[n].params)
-                            if spec.reward.features[n].params else REWARD_FEATURES[n].fn for n in self.feature_names]
+        self.feature_fns = [
+            partial(REWARD_FEATURES[n].fn, **spec.reward.features[n].params)
+            if spec.reward.features[n].params
+            else REWARD_FEATURES[n].fn
+            for n in self.feature_names
+        ]
         self.weights = [float(spec.reward.features[n].weight) for n in self.feature_names]
         self.obs_fns = [OBSERVATION_TERMS[n].fn for n in spec.observation.terms()]
         self.obs_dim = sum(OBSERVATION_TERMS[n].size for n in spec.observation.terms())
@@ -255,8 +259,15 @@ class FastEnv(gym.Env):
     def _start_pose(self) -> np.ndarray:
         """The spec's start pose plus its uniform noise."""
         st = self.task_spec.scope.start
-        q = np.array([math.radians(st.pitch_deg), math.radians(st.yaw_deg), st.insertion,
-                      math.radians(st.roll_deg), math.radians(st.cable_deg)])
+        q = np.array(
+            [
+                math.radians(st.pitch_deg),
+                math.radians(st.yaw_deg),
+                st.insertion,
+                math.radians(st.roll_deg),
+                math.radians(st.cable_deg),
+            ]
+        )
         noise = np.array(st.noise) * np.array([math.pi / 180, math.pi / 180, 1.0, math.pi / 180, math.pi / 180])
         return q + self.np_random.uniform(-1.0, 1.0, 5) * noise
 

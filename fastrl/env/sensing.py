@@ -77,11 +77,20 @@ class Sensor:
             vel = ((pos[0] - p0[0]) * k, (pos[1] - p0[1]) * k, (pos[2] - p0[2]) * k)
             s.tip_accel = ((vel[0] - v0[0]) * k, (vel[1] - v0[1]) * k, (vel[2] - v0[2]) * k)
             s.tip_vel = vel
-            s.tip_quat_rate = ((quat[0] - q0[0]) * k, (quat[1] - q0[1]) * k, (quat[2] - q0[2]) * k,
-                               (quat[3] - q0[3]) * k)
+            s.tip_quat_rate = (
+                (quat[0] - q0[0]) * k,
+                (quat[1] - q0[1]) * k,
+                (quat[2] - q0[2]) * k,
+                (quat[3] - q0[3]) * k,
+            )
             q1 = s.portal
-            s.portal_vel = ((q[0] - q1[0]) * k, (q[1] - q1[1]) * k, (q[2] - q1[2]) * k, (q[3] - q1[3]) * k,
-                            (q[4] - q1[4]) * k)
+            s.portal_vel = (
+                (q[0] - q1[0]) * k,
+                (q[1] - q1[1]) * k,
+                (q[2] - q1[2]) * k,
+                (q[3] - q1[3]) * k,
+                (q[4] - q1[4]) * k,
+            )
         s.tip_pos = s.cam_pos = pos
         s.tip_quat, s.portal = quat, q
         s.tip_speed = norm(s.tip_vel)

@@ -5,5 +5,11 @@ from .discriminator import Discriminator
 from .fitting import DiscriminatorFit, Transitions
 from .offpolicy import OffPolicyAdversarialCallback, RelabelingReplayBuffer
 
-__all__ = ["AdversarialCallback", "Discriminator", "DiscriminatorFit", "OffPolicyAdversarialCallback",
-           "RelabelingReplayBuffer", "Transitions"]
+__all__ = [
+    "AdversarialCallback",
+    "Discriminator",
+    "DiscriminatorFit",
+    "OffPolicyAdversarialCallback",
+    "RelabelingReplayBuffer",
+    "Transitions",
+]

@@ -23,10 +23,21 @@ class AdversarialCallback(BaseCallback):
     of its discounted return. With `ranked` rollouts, each discriminator step adds `ranking_weight` times their
     ranking loss on shaped AIRL's r_psi."""
 
-    def __init__(self, disc: Discriminator, expert: Transitions, epochs: int = 2, batch_size: int = 256,
-                 lr: float = 3e-4, seed: int = 0, entropy: bool = True, history: int = 0,
-                 scale_reward: bool | None = None, gradient_penalty: float = 0.0,
-                 ranked: RankedRollouts | None = None, ranking_weight: float = 0.0):
+    def __init__(
+        self,
+        disc: Discriminator,
+        expert: Transitions,
+        epochs: int = 2,
+        batch_size: int = 256,
+        lr: float = 3e-4,
+        seed: int = 0,
+        entropy: bool = True,
+        history: int = 0,
+        scale_reward: bool | None = None,
+        gradient_penalty: float = 0.0,
+        ranked: RankedRollouts | None = None,
+        ranking_weight: float = 0.0,
+    ):
         super().__init__()
         self.disc, self.expert, self.n_epochs, self.entropy = disc, expert, epochs, entropy
         self.fit = DiscriminatorFit(disc, lr, batch_size, seed, gradient_penalty)
@@ -67,8 +78,12 @@ class AdversarialCallback(BaseCallback):
         """The rollout's batch plus as many rows from the history; then the rollout joins the history."""
         buf = self.model.rollout_buffer
         n = len(term)
-        raw = Transitions(np.stack(self.raw_obs[:-1]).reshape(n, -1), np.stack(self.raw_next).reshape(n, -1),
-                          term, buf.actions.reshape(n, *buf.actions.shape[2:]))
+        raw = Transitions(
+            np.stack(self.raw_obs[:-1]).reshape(n, -1),
+            np.stack(self.raw_next).reshape(n, -1),
+            term,
+            buf.actions.reshape(n, *buf.actions.shape[2:]),
+        )
         if len(self.history):
             policy = policy.cat(transitions_batch(self.model, self.history.sample(n), self.disc))
         self.history.add(raw)

@@ -43,9 +43,19 @@ def absorbing_states(k: int, obs_dim: int) -> torch.Tensor:
 class Discriminator(nn.Module):
     """Logits of 'expert' for transitions (s, s', terminal, log pi(a|s)) of augmented states; state-only rewards."""
 
-    def __init__(self, obs_dim: int, kind: Literal["gail", "airl"], gamma: float, hidden=(64, 64),
-                 spectral: bool = False, absorbing: bool = True, shaped: bool = True, policy_term: bool = True,
-                 inputs: list[int] | None = None, reward_inputs: list[int] | None = None):
+    def __init__(
+        self,
+        obs_dim: int,
+        kind: Literal["gail", "airl"],
+        gamma: float,
+        hidden=(64, 64),
+        spectral: bool = False,
+        absorbing: bool = True,
+        shaped: bool = True,
+        policy_term: bool = True,
+        inputs: list[int] | None = None,
+        reward_inputs: list[int] | None = None,
+    ):
         super().__init__()
         self.obs_dim, self.kind, self.gamma, self.policy_term = obs_dim, kind, gamma, policy_term
         self.hidden, self.spectral, self.absorbing = tuple(hidden), spectral, absorbing
@@ -57,8 +67,8 @@ class Discriminator(nn.Module):
         width = (obs_dim if inputs is None else len(self.inputs)) + 1
         if self.shaped:
             reward_width = (obs_dim if self.reward_inputs is None else len(self.reward_inputs)) + 1
-            self.r_psi = mlp(reward_width, self.hidden, sn=spectral)   # the reward kept for scoring
-            self.h = mlp(width, self.hidden, sn=spectral)       # the shaping potential
+            self.r_psi = mlp(reward_width, self.hidden, sn=spectral)  # the reward kept for scoring
+            self.h = mlp(width, self.hidden, sn=spectral)  # the shaping potential
             self.h_absorbing = nn.Parameter(torch.zeros(()))
         else:
             self.net = mlp(2 * width, self.hidden, sn=spectral)
@@ -129,6 +139,15 @@ class Discriminator(nn.Module):
 
     def config(self) -> dict:
         """What rebuilds this discriminator (for pickle-free saving)."""
-        return {"obs_dim": self.obs_dim, "kind": self.kind, "gamma": self.gamma, "hidden": list(self.hidden),
-                "spectral": self.spectral, "absorbing": self.absorbing, "shaped": self.shaped,
-                "policy_term": self.policy_term, "inputs": self.inputs, "reward_inputs": self.reward_inputs}
+        return {
+            "obs_dim": self.obs_dim,
+            "kind": self.kind,
+            "gamma": self.gamma,
+            "hidden": list(self.hidden),
+            "spectral": self.spectral,
+            "absorbing": self.absorbing,
+            "shaped": self.shaped,
+            "policy_term": self.policy_term,
+            "inputs": self.inputs,
+            "reward_inputs": self.reward_inputs,
+        }

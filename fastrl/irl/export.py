@@ -61,8 +61,10 @@ def mlp_layers(module: nn.Module) -> list[dict]:
         return [{"type": "hardtanh", "min": float(module.min_val), "max": float(module.max_val)}]
     if type(module) in ACTIVATIONS:
         return [{"type": ACTIVATIONS[type(module)]}]
-    raise ValueError(f"cannot export module {type(module).__name__}: only Sequential, Linear, Tanh, ReLU, "
-                     "Hardtanh and Identity are supported")
+    raise ValueError(
+        f"cannot export module {type(module).__name__}: only Sequential, Linear, Tanh, ReLU, "
+        "Hardtanh and Identity are supported"
+    )
 
 
 def export_parts(parts: dict[str, nn.Module]) -> tuple[dict, dict[str, torch.Tensor]]:
@@ -77,8 +79,9 @@ def export_parts(parts: dict[str, nn.Module]) -> tuple[dict, dict[str, torch.Ten
                 specs[name].append(layer)
                 continue
             out_features, in_features = layer["weight"].shape
-            specs[name].append({"type": "linear", "in": in_features, "out": out_features,
-                                "bias": layer["bias"] is not None})
+            specs[name].append(
+                {"type": "linear", "in": in_features, "out": out_features, "bias": layer["bias"] is not None}
+            )
             tensors[f"{name}.{i}.weight"] = layer["weight"]
             if layer["bias"] is not None:
                 tensors[f"{name}.{i}.bias"] = layer["bias"]
@@ -155,11 +158,18 @@ def reward_export(disc: Discriminator, gamma: float) -> tuple[dict, dict[str, to
     specs, tensors = export_parts(parts)
     with _eval_mode(disc):
         absorbing_value = float(disc.absorbing_value())
-    meta = {"parts": specs, "kind": disc.kind, "form": "state" if shaped else "transition",
-            "gamma": float(gamma), "absorbing": bool(disc.absorbing),
-            "absorbing_value": absorbing_value, "absorbing_reward": float(disc.r_absorbing.detach()),
-            "inputs": disc.inputs, "reward_inputs": disc.reward_inputs if shaped else disc.inputs,
-            "discriminator": disc.config()}
+    meta = {
+        "parts": specs,
+        "kind": disc.kind,
+        "form": "state" if shaped else "transition",
+        "gamma": float(gamma),
+        "absorbing": bool(disc.absorbing),
+        "absorbing_value": absorbing_value,
+        "absorbing_reward": float(disc.r_absorbing.detach()),
+        "inputs": disc.inputs,
+        "reward_inputs": disc.reward_inputs if shaped else disc.inputs,
+        "discriminator": disc.config(),
+    }
     return meta, tensors
 
 
@@ -198,8 +208,14 @@ def write_pair(out_dir: Path, name: str, meta: dict, tensors: dict[str, torch.Te
     return [pt, js]
 
 
-def save_networks(out_dir: Path, model: BaseAlgorithm, venv: VecEnv | None, disc: Discriminator | None,
-                  gamma: float, snapshots: list[dict[str, torch.Tensor]] | None = None) -> list[Path]:
+def save_networks(
+    out_dir: Path,
+    model: BaseAlgorithm,
+    venv: VecEnv | None,
+    disc: Discriminator | None,
+    gamma: float,
+    snapshots: list[dict[str, torch.Tensor]] | None = None,
+) -> list[Path]:
     """Write policy, value and (with a discriminator) reward as .pt + .json pairs into out_dir; return the paths.
 
     With `snapshots` (shaped AIRL's r_psi and h during training), the reward also holds them and the final
@@ -225,5 +241,5 @@ def save_networks(out_dir: Path, model: BaseAlgorithm, venv: VecEnv | None, disc
         paths += write_pair(out_dir, name, meta, {**tensors, **norm_tensors})
     return paths
 
-# ----------------------------------------------------------------------------------------------- load
 
+# ----------------------------------------------------------------------------------------------- load

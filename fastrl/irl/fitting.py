@@ -46,8 +46,17 @@ class Batch:
 
     def cat(self, other: Batch) -> Batch:
         """This batch's rows followed by other's."""
-        return Batch(*(torch.cat([a, b]) for a, b in ((self.s, other.s), (self.s2, other.s2),
-                                                       (self.terminal, other.terminal), (self.log_pi, other.log_pi))))
+        return Batch(
+            *(
+                torch.cat([a, b])
+                for a, b in (
+                    (self.s, other.s),
+                    (self.s2, other.s2),
+                    (self.terminal, other.terminal),
+                    (self.log_pi, other.log_pi),
+                )
+            )
+        )
 
 
 def make_batch(obs, next_obs, terminal, log_pi, absorbing: bool) -> Batch:
@@ -68,10 +77,11 @@ def input_gradient_norm(disc: Discriminator, policy: Batch, expert: Batch, alpha
     mix = lambda a, b: alpha * b + (1.0 - alpha) * a  # noqa: E731
     s = mix(policy.s, expert.s).requires_grad_(True)
     s2 = mix(policy.s2, expert.s2).requires_grad_(True)
-    z = disc.logits(s, s2, mix(policy.terminal[:, None], expert.terminal[:, None])[:, 0],
-                    torch.zeros_like(policy.log_pi))
+    z = disc.logits(
+        s, s2, mix(policy.terminal[:, None], expert.terminal[:, None])[:, 0], torch.zeros_like(policy.log_pi)
+    )
     gs, gs2 = torch.autograd.grad(z.sum(), [s, s2], create_graph=True)
-    return torch.sqrt((gs ** 2).sum(-1) + (gs2 ** 2).sum(-1) + 1e-12)
+    return torch.sqrt((gs**2).sum(-1) + (gs2**2).sum(-1) + 1e-12)
 
 
 class DiscriminatorFit:
@@ -80,8 +90,9 @@ class DiscriminatorFit:
     With `gradient_penalty` > 0, each step adds that weight times (|grad_(s, s') logit| - 1)^2 at random points
     between the paired rows (the WGAN-GP penalty, as in Discriminator-Actor-Critic)."""
 
-    def __init__(self, disc: Discriminator, lr: float = 3e-4, batch_size: int = 256, seed: int = 0,
-                 gradient_penalty: float = 0.0):
+    def __init__(
+        self, disc: Discriminator, lr: float = 3e-4, batch_size: int = 256, seed: int = 0, gradient_penalty: float = 0.0
+    ):
         self.disc, self.batch_size, self.gradient_penalty = disc, batch_size, gradient_penalty
         self.ranking: Callable[[], torch.Tensor] | None = None  # a weighted ranking loss added to each step
         self.optim = torch.optim.Adam(disc.parameters(), lr=lr)
@@ -119,8 +130,12 @@ class DiscriminatorFit:
             z_p.append(float(zp.detach().mean()))
             z_e.append(float(ze.detach().mean()))
             ranks.append(float(rank.detach()))
-        stats = {"irl/disc_loss": float(np.mean(losses)), "irl/disc_accuracy": float(np.mean(accs)),
-                 "irl/logit_policy": float(np.mean(z_p)), "irl/logit_expert": float(np.mean(z_e))}
+        stats = {
+            "irl/disc_loss": float(np.mean(losses)),
+            "irl/disc_accuracy": float(np.mean(accs)),
+            "irl/logit_policy": float(np.mean(z_p)),
+            "irl/logit_expert": float(np.mean(z_e)),
+        }
         if self.ranking is not None:
             stats["irl/ranking_loss"] = float(np.mean(ranks))
         return stats
@@ -133,8 +148,11 @@ class DiscriminatorFit:
             else:
                 rp = self.disc.logits(policy.s, policy.s2, policy.terminal, policy.log_pi)
                 re = self.disc.logits(expert.s, expert.s2, expert.terminal, expert.log_pi)
-        return {"irl/reward_policy": float(rp.mean()), "irl/reward_expert": float(re.mean()),
-                "irl/absorbing_value": self.disc.absorbing_value()}
+        return {
+            "irl/reward_policy": float(rp.mean()),
+            "irl/reward_expert": float(re.mean()),
+            "irl/absorbing_value": self.disc.absorbing_value(),
+        }
 
     def state_dict(self) -> dict:
         """Discriminator and optimizer tensors, for checkpoints."""

@@ -43,8 +43,9 @@ def current_original_obs(model: BaseAlgorithm, latest: np.ndarray) -> np.ndarray
     return env.get_original_obs() if isinstance(env, VecNormalize) else latest
 
 
-def transitions_batch(model: BaseAlgorithm, data: Transitions, disc: Discriminator, rows: np.ndarray | None = None
-                      ) -> Batch:
+def transitions_batch(
+    model: BaseAlgorithm, data: Transitions, disc: Discriminator, rows: np.ndarray | None = None
+) -> Batch:
     """Transitions with raw observations (or only `rows` of them) as a discriminator batch: normalised as the
     policy sees them now, log pi(a|s) under the current policy."""
     if rows is not None:

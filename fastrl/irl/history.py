@@ -23,8 +23,12 @@ class PolicyHistory:
         """Offer every row of `new` to the reservoir."""
         n = len(new)
         if self.data is None:
-            self.data = Transitions(*(np.zeros((self.capacity, *x.shape[1:]), x.dtype)
-                                      for x in (new.obs, new.next_obs, new.terminal, new.actions)))
+            self.data = Transitions(
+                *(
+                    np.zeros((self.capacity, *x.shape[1:]), x.dtype)
+                    for x in (new.obs, new.next_obs, new.terminal, new.actions)
+                )
+            )
         free = min(n, self.capacity - self.size)
         slots = np.arange(self.size, self.size + free)
         seen_at = self.seen + np.arange(free + 1, n + 1)  # how many rows had been offered when each later row came
@@ -32,8 +36,10 @@ class PolicyHistory:
         keep = draw < self.capacity
         rows = np.concatenate([np.arange(free), free + np.flatnonzero(keep)])
         slots = np.concatenate([slots, draw[keep]])
-        for mine, theirs in zip((self.data.obs, self.data.next_obs, self.data.terminal, self.data.actions),
-                                (new.obs, new.next_obs, new.terminal, new.actions)):
+        for mine, theirs in zip(
+            (self.data.obs, self.data.next_obs, self.data.terminal, self.data.actions),
+            (new.obs, new.next_obs, new.terminal, new.actions),
+        ):
             mine[slots] = theirs[rows]  # a slot drawn twice keeps the later row, as sequential sampling would
         self.size += free
         self.seen += n

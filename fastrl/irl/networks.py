@@ -41,8 +41,9 @@ def _read_tensors(path: Path, sha256: str) -> dict[str, torch.Tensor]:
         tensors = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:  # truncated zip, or anything weights_only refuses to unpickle
         raise ValueError(f"{path}: cannot load with weights_only=True ({e})") from e
-    if not isinstance(tensors, dict) or not all(isinstance(k, str) and isinstance(v, torch.Tensor)
-                                                for k, v in tensors.items()):
+    if not isinstance(tensors, dict) or not all(
+        isinstance(k, str) and isinstance(v, torch.Tensor) for k, v in tensors.items()
+    ):
         raise ValueError(f"{path}: not a flat dict of tensors")
     return tensors
 
@@ -172,11 +173,16 @@ def reward_members(r: Loaded) -> list[RewardMember]:
     members = []
     for k in range(count):
         prefix = f"average.{k}."
-        own = {name[len(prefix):]: t for name, t in r.tensors.items() if name.startswith(prefix)}
+        own = {name[len(prefix) :]: t for name, t in r.tensors.items() if name.startswith(prefix)}
         try:
-            members.append(RewardMember(build_mlp("r_psi", r.meta["parts"]["r_psi"], own),
-                                        build_mlp("h", r.meta["parts"]["h"], own), float(own["r_absorbing"]),
-                                        build_norm(r.meta, own)))
+            members.append(
+                RewardMember(
+                    build_mlp("r_psi", r.meta["parts"]["r_psi"], own),
+                    build_mlp("h", r.meta["parts"]["h"], own),
+                    float(own["r_absorbing"]),
+                    build_norm(r.meta, own),
+                )
+            )
         except KeyError as e:
             raise ValueError(f"{r.path}: tensor {prefix}{e.args[0]} missing from the averaged reward") from e
         except ValueError as e:
@@ -293,8 +299,13 @@ class Networks:
         r = self._reward_pair()
         with torch.no_grad():
             if r.meta["form"] == "state":
-                return torch.stack([m.r_psi(self._states(r, obs[:-1], "reward_inputs", m.norm)).squeeze(-1)
-                                    for m in self._members]).mean(0).numpy()
+                return (
+                    torch.stack(
+                        [m.r_psi(self._states(r, obs[:-1], "reward_inputs", m.norm)).squeeze(-1) for m in self._members]
+                    )
+                    .mean(0)
+                    .numpy()
+                )
             s = self._states(r, obs)
             return r.parts["net"](torch.cat([s[:-1], s[1:]], dim=-1)).squeeze(-1).numpy()
 
@@ -304,8 +315,9 @@ class Networks:
         if r.meta["form"] != "state":
             raise ValueError(f"{self.directory / 'reward.json'}: only shaped AIRL has a shaping potential h")
         with torch.no_grad():
-            return torch.stack([m.h(self._states(r, obs, norm=m.norm)).squeeze(-1)
-                                for m in self._members]).mean(0).numpy()
+            return (
+                torch.stack([m.h(self._states(r, obs, norm=m.norm)).squeeze(-1) for m in self._members]).mean(0).numpy()
+            )
 
     def absorbing_reward(self) -> float:
         """The learned reward of the absorbing state (a learned constant), in the same form as reward()."""

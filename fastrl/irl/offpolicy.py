@@ -43,9 +43,18 @@ class RelabelingReplayBuffer(ReplayBuffer):
 class OffPolicyAdversarialCallback(BaseCallback):
     """Before each SAC update: fit the discriminator on current-rollout (or replay) samples vs expert samples."""
 
-    def __init__(self, disc: Discriminator, expert: Transitions, current_rollout: bool = True, steps: int = 4,
-                 batch_size: int = 256, lr: float = 3e-4, seed: int = 0, every: int = 0,
-                 gradient_penalty: float = 0.0):
+    def __init__(
+        self,
+        disc: Discriminator,
+        expert: Transitions,
+        current_rollout: bool = True,
+        steps: int = 4,
+        batch_size: int = 256,
+        lr: float = 3e-4,
+        seed: int = 0,
+        every: int = 0,
+        gradient_penalty: float = 0.0,
+    ):
         super().__init__()
         self.disc, self.expert, self.current_rollout, self.n_steps = disc, expert, current_rollout, steps
         self.every, self.last_fit = every, 0

@@ -18,8 +18,9 @@ from ..agents.expert import ScriptedExpert
 from .discriminator import Discriminator, absorbing_states, augment
 
 
-def noisy_expert_rollout(env, expert: ScriptedExpert, noise: float, seed: int, repeat: int = 1
-                         ) -> tuple[np.ndarray, bool]:
+def noisy_expert_rollout(
+    env, expert: ScriptedExpert, noise: float, seed: int, repeat: int = 1
+) -> tuple[np.ndarray, bool]:
     """Raw observations (T+1, d) of the expert whose action is replaced, with probability `noise`, by a random one
     held for `repeat` steps; and whether the episode terminated (the task done) rather than ran out of time."""
     from ..data.replay import rollout_trajectory  # data imports irl: import here, not at module level
@@ -44,18 +45,20 @@ def noisy_expert_rollout(env, expert: ScriptedExpert, noise: float, seed: int, r
 class RankedRollouts:
     """Noisy-expert rollouts padded to one length, their noise rates, and the ranking loss of r_psi on them."""
 
-    def __init__(self, env, noise: list[float], episodes: int, seed: int = 50000, snippet: int = 50,
-                 repeat: int = 1):
+    def __init__(self, env, noise: list[float], episodes: int, seed: int = 50000, snippet: int = 50, repeat: int = 1):
         expert = ScriptedExpert(env)
-        runs = [noisy_expert_rollout(env, expert, eps, seed + 1000 * i + k, repeat)
-                for i, eps in enumerate(noise) for k in range(episodes)]
+        runs = [
+            noisy_expert_rollout(env, expert, eps, seed + 1000 * i + k, repeat)
+            for i, eps in enumerate(noise)
+            for k in range(episodes)
+        ]
         self.noise = np.repeat(np.asarray(noise, float), episodes)
         self.snippet = snippet
         horizon = max(len(obs) for obs, _ in runs)
         self.raw = np.stack([np.concatenate([obs, np.repeat(obs[-1:], horizon - len(obs), 0)]) for obs, _ in runs])
         self.absorbed = np.zeros(self.raw.shape[:2], bool)
         for j, (obs, ended) in enumerate(runs):
-            self.absorbed[j, len(obs):] = ended  # a rollout cut by the time limit is already the full length
+            self.absorbed[j, len(obs) :] = ended  # a rollout cut by the time limit is already the full length
 
     def states(self, normalize: Callable[[np.ndarray], np.ndarray]) -> torch.Tensor:
         """Augmented states (rollouts, steps, d + 1), normalised as the discriminator sees them now."""
@@ -65,8 +68,9 @@ class RankedRollouts:
         s[flag] = absorbing_states(int(flag.sum()), d)
         return s
 
-    def loss(self, disc: Discriminator, states: torch.Tensor, rng: np.random.Generator, pairs: int = 32
-             ) -> torch.Tensor:
+    def loss(
+        self, disc: Discriminator, states: torch.Tensor, rng: np.random.Generator, pairs: int = 32
+    ) -> torch.Tensor:
         """Mean -log P(the less noisy snippet sums higher) over random pairs of rollouts of different noise."""
         i, j = rng.integers(0, len(self.noise), (2, pairs))
         keep = self.noise[i] != self.noise[j]

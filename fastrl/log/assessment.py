@@ -29,27 +29,41 @@ def _slug(text: str) -> str:
 def markdown_table(report: dict) -> str:
     """The group table and the ranking as markdown."""
     keys = report["scores"]
-    lines = [f"## Scores by {report['grouped_by']}", "", "| group | n | " + " | ".join(keys) + " |",
-             "|---|---|" + "---|" * len(keys)]
+    lines = [
+        f"## Scores by {report['grouped_by']}",
+        "",
+        "| group | n | " + " | ".join(keys) + " |",
+        "|---|---|" + "---|" * len(keys),
+    ]
     for g in report["groups"]:
         cells = [("-" if g[k] is None else f"{g[k]:.3g} ± {g[k + '_sd']:.2g}") for k in keys]
         lines.append(f"| {g['subject']} | {g['n']} | " + " | ".join(cells) + " |")
     if report["ranking"]:
-        lines += ["", "## Ranking against skill labels", "",
-                  "| score | Spearman rho [95% CI] | Kendall tau-b [95% CI] | levels in order |", "|---|---|---|---|"]
+        lines += [
+            "",
+            "## Ranking against skill labels",
+            "",
+            "| score | Spearman rho [95% CI] | Kendall tau-b [95% CI] | levels in order |",
+            "|---|---|---|---|",
+        ]
         for k, r in report["ranking"].items():
+
             def fmt(v, ci):
                 return "-" if v is None else f"{v:.2f}" + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "")
-            lines.append(f"| {k} | {fmt(r['spearman'], r['spearman_ci'])} | {fmt(r['kendall_tau_b'], r['kendall_ci'])}"
-                         f" | {'yes' if r['levels_in_order'] else 'no'} |")
+
+            lines.append(
+                f"| {k} | {fmt(r['spearman'], r['spearman_ci'])} | {fmt(r['kendall_tau_b'], r['kendall_ci'])}"
+                f" | {'yes' if r['levels_in_order'] else 'no'} |"
+            )
     lines += ["", report["normalisation"]] + [f"\n_Note: {w}_" for w in report.get("warnings", [])]
     if report["problems"]:
         lines += ["", "## Files not scored", ""] + [f"- {p}" for p in report["problems"]]
     return "\n".join(lines)
 
 
-def log_assessment(path: Path, recording_id: str, task: CompiledTask, scored, report: dict,
-                   deviations: dict[str, np.ndarray], group_of) -> Path:
+def log_assessment(
+    path: Path, recording_id: str, task: CompiledTask, scored, report: dict, deviations: dict[str, np.ndarray], group_of
+) -> Path:
     """Write an .rrd (same recording id as the run, so the viewer shows it with the run) and return its path."""
     rec = rr.RecordingStream("fastrl", recording_id=recording_id)
     rec.set_log_time_enabled(False)
@@ -63,21 +77,30 @@ def log_assessment(path: Path, recording_id: str, task: CompiledTask, scored, re
             v = s.values if s.values is not None else s.time
             colours = _colours(v, lo, hi) if s.values is not None else _colours(v, v.min(), v.max())
             rec.log(f"world/assessment/{base}", rr.Points3D(s.tip, colors=colours, radii=0.0008), static=True)
-            rec.log(f"world/assessment/{base}/path", rr.LineStrips3D([s.tip], colors=[[200, 200, 200]],
-                                                                     radii=0.0002), static=True)
-            rec.log(f"assessment/xy/{base}", rr.Points2D(s.tip[:, :2] * [1000, -1000], colors=colours, radii=0.4),
-                    static=True)
+            rec.log(
+                f"world/assessment/{base}/path",
+                rr.LineStrips3D([s.tip], colors=[[200, 200, 200]], radii=0.0002),
+                static=True,
+            )
+            rec.log(
+                f"assessment/xy/{base}",
+                rr.Points2D(s.tip[:, :2] * [1000, -1000], colors=colours, radii=0.4),
+                static=True,
+            )
             if s.name in deviations:
                 d = deviations[s.name]
                 rec.log(f"assessment/deviation/{base}", rr.SeriesLines(names=s.name, widths=1.0), static=True)
-                rec.send_columns(f"assessment/deviation/{base}",
-                                 indexes=[rr.TimeColumn("percent", sequence=np.arange(len(d)))],
-                                 columns=rr.Scalars.columns(scalars=d))
+                rec.send_columns(
+                    f"assessment/deviation/{base}",
+                    indexes=[rr.TimeColumn("percent", sequence=np.arange(len(d)))],
+                    columns=rr.Scalars.columns(scalars=d),
+                )
         for k in report["scores"]:
             means = [g[k] if g[k] is not None else np.nan for g in report["groups"]]
             rec.log(f"assessment/scores/{k}", rr.BarChart(np.nan_to_num(np.array(means, float))), static=True)
-        rec.log("assessment/summary", rr.TextDocument(markdown_table(report), media_type=rr.MediaType.MARKDOWN),
-                static=True)
+        rec.log(
+            "assessment/summary", rr.TextDocument(markdown_table(report), media_type=rr.MediaType.MARKDOWN), static=True
+        )
         rec.send_blueprint(_blueprint(report))
     finally:
         rec.flush()

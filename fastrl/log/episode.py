@@ -47,9 +47,7 @@ def _log_scope(rec, world: str, ep: EpisodeRecord, index: list, diameter: float)
     rec.send_columns(
         f"{world}/shaft",
         indexes=index,
-        columns=rr.LineStrips3D.columns(
-            strips=shaft, radii=np.full(n, 0.5 * diameter), colors=np.tile(SHAFT, (n, 1))
-        ),
+        columns=rr.LineStrips3D.columns(strips=shaft, radii=np.full(n, 0.5 * diameter), colors=np.tile(SHAFT, (n, 1))),
     )
     rec.send_columns(
         f"{world}/tip",
@@ -60,9 +58,7 @@ def _log_scope(rec, world: str, ep: EpisodeRecord, index: list, diameter: float)
     )
 
 
-def _log_camera(
-    rec, world: str, ep: EpisodeRecord, index: list, fov_deg: float, image_size
-) -> None:
+def _log_camera(rec, world: str, ep: EpisodeRecord, index: list, fov_deg: float, image_size) -> None:
     """Camera pose per step (MuJoCo wxyz -> xyzw), a static pinhole looking along -Z, the images."""
     # The pinhole takes the images' own size; `image_size` (w, h) serves only when there are none.
     quat = np.asarray(ep.tip_quat, float)[:, [1, 2, 3, 0]]
@@ -130,9 +126,7 @@ def _log_cue(rec, world: str, ep: EpisodeRecord, index: list, task: CompiledTask
     rec.send_columns(
         f"{world}/avatar",
         indexes=index,
-        columns=rr.Points3D.columns(
-            positions=lifted[k], colors=colors, radii=np.full(len(k), radius)
-        ),
+        columns=rr.Points3D.columns(positions=lifted[k], colors=colors, radii=np.full(len(k), radius)),
     )
 
 

@@ -17,16 +17,26 @@ PANELS = (("reward", "economy"), ("reward", "safety"), ("value", "economy"), ("v
 
 def table3_markdown(result: dict) -> str:
     """Table 3 as markdown: Spearman's rho (p-value) of learned reward and value against economy and safety."""
-    lines = ["## Learned scores against economy and safety (Spearman's rho, p-value)", "",
-             "| model | reward-economy | reward-safety | value-economy | value-safety |", "|---|---|---|---|---|"]
+    lines = [
+        "## Learned scores against economy and safety (Spearman's rho, p-value)",
+        "",
+        "| model | reward-economy | reward-safety | value-economy | value-safety |",
+        "|---|---|---|---|---|",
+    ]
     for algo, cells in result["table3"].items():
         if algo == "heuristic":
             continue
         lines.append(f"| {algo.upper()} | " + " | ".join(_cell(cells[f"{k}-{m}"]) for k, m in PANELS) + " |")
     h = result["table3"]["heuristic"]
-    lines += ["", f"Heuristic return: economy {_cell(h['heuristic-economy'])}, safety {_cell(h['heuristic-safety'])}.",
-              "", f"{result['n']} procedures; the inverse-RL demonstrations are the {len(result['best'])} best by "
-              "the heuristic return.", "", *(f"- {k}: {v}" for k, v in result["metrics"].items())]
+    lines += [
+        "",
+        f"Heuristic return: economy {_cell(h['heuristic-economy'])}, safety {_cell(h['heuristic-safety'])}.",
+        "",
+        f"{result['n']} procedures; the inverse-RL demonstrations are the {len(result['best'])} best by "
+        "the heuristic return.",
+        "",
+        *(f"- {k}: {v}" for k, v in result["metrics"].items()),
+    ]
     return "\n".join(lines)
 
 
@@ -68,8 +78,9 @@ def plot_correlations(result: dict, path: Path) -> Path:
     return Path(path)
 
 
-def log_experiment(path: Path, recording_id: str, task: CompiledTask, scored, learned: dict, result: dict,
-                   figure: Path | None = None) -> Path:
+def log_experiment(
+    path: Path, recording_id: str, task: CompiledTask, scored, learned: dict, result: dict, figure: Path | None = None
+) -> Path:
     """Write the experiment's .rrd: anatomy, every camera path coloured by learned value, Table 3 plots."""
     rec = rr.RecordingStream("fastrl", recording_id=recording_id)
     rec.set_log_time_enabled(False)
@@ -92,8 +103,9 @@ def log_experiment(path: Path, recording_id: str, task: CompiledTask, scored, le
             for k, m in PANELS:
                 x, y = _unit(np.array([r[m] for r in rows])), _unit(np.array([r[f"{a}_{k}"] for r in rows]))
                 entity = f"correlations/{a}/{k}_{m}"
-                rec.log(entity, rr.Points2D(np.column_stack([x, -y]), colors=colours, radii=1.2, labels=labels),
-                        static=True)
+                rec.log(
+                    entity, rr.Points2D(np.column_stack([x, -y]), colors=colours, radii=1.2, labels=labels), static=True
+                )
                 c = result["table3"][a][f"{k}-{m}"]
                 views.append(rrb.Spatial2DView(origin=f"/{entity}", name=f"{a.upper()} {k} vs {m}: rho {_cell(c)}"))
         rec.log("summary", rr.TextDocument(table3_markdown(result), media_type=rr.MediaType.MARKDOWN), static=True)
@@ -101,11 +113,20 @@ def log_experiment(path: Path, recording_id: str, task: CompiledTask, scored, le
         if figure is not None and Path(figure).is_file():
             rec.log("figure", rr.EncodedImage(path=figure), static=True)
             tabs.insert(0, rrb.Spatial2DView(origin="/figure", name="correlations (Fig. 8)"))
-        rec.send_blueprint(rrb.Blueprint(rrb.Horizontal(
-            rrb.Vertical(rrb.Spatial3DView(origin="/world", name=f"camera paths by learned value ({algo})"),
-                         rrb.TextDocumentView(origin="/summary", name="Table 3"), row_shares=[3, 2]),
-            rrb.Tabs(*tabs, active_tab=0),
-            column_shares=[2, 3]), collapse_panels=True))
+        rec.send_blueprint(
+            rrb.Blueprint(
+                rrb.Horizontal(
+                    rrb.Vertical(
+                        rrb.Spatial3DView(origin="/world", name=f"camera paths by learned value ({algo})"),
+                        rrb.TextDocumentView(origin="/summary", name="Table 3"),
+                        row_shares=[3, 2],
+                    ),
+                    rrb.Tabs(*tabs, active_tab=0),
+                    column_shares=[2, 3],
+                ),
+                collapse_panels=True,
+            )
+        )
     finally:
         rec.flush()
         rec.disconnect()

@@ -14,17 +14,21 @@ def episode_name(index: int) -> str:
 
 def training_views(irl: bool = False) -> rrb.Tabs:
     """Training curves in tabs: episodes, evaluations during training, (discriminator, learned reward), all."""
-    def series(origin: str, name: str, contents=None) -> rrb.TimeSeriesView:
-        return rrb.TimeSeriesView(origin=origin, contents=contents or ["$origin/**"], name=name,
-                                  plot_legend=rrb.Corner2D.LeftTop)
 
-    tabs = [series("/metrics/train/episode", "training episodes"),
-            series("/metrics/train/eval", "evaluation during training")]
+    def series(origin: str, name: str, contents=None) -> rrb.TimeSeriesView:
+        return rrb.TimeSeriesView(
+            origin=origin, contents=contents or ["$origin/**"], name=name, plot_legend=rrb.Corner2D.LeftTop
+        )
+
+    tabs = [
+        series("/metrics/train/episode", "training episodes"),
+        series("/metrics/train/eval", "evaluation during training"),
+    ]
     if irl:
-        tabs += [series("/metrics/train/irl", "discriminator",
-                        ["+ $origin/disc_accuracy", "+ $origin/disc_loss"]),
-                 series("/metrics/train/irl", "learned reward",
-                        ["+ $origin/reward_expert", "+ $origin/reward_policy"])]
+        tabs += [
+            series("/metrics/train/irl", "discriminator", ["+ $origin/disc_accuracy", "+ $origin/disc_loss"]),
+            series("/metrics/train/irl", "learned reward", ["+ $origin/reward_expert", "+ $origin/reward_policy"]),
+        ]
     tabs.append(series("/metrics/train", "all curves (timeline: timesteps)"))
     return rrb.Tabs(*tabs, active_tab=2 if irl else 0)
 
@@ -38,9 +42,7 @@ def run_blueprint(
     # the episode, `timesteps` the training curves.
     eye_controls = None
     if eye is not None:
-        eye_controls = rrb.EyeControls3D(
-            position=eye[0], look_target=eye[1], eye_up=(0.0, 0.0, 1.0)
-        )
+        eye_controls = rrb.EyeControls3D(position=eye[0], look_target=eye[1], eye_up=(0.0, 0.0, 1.0))
     training = training_views(irl)
     summary = rrb.TextDocumentView(origin="/summary", name="summary")
     if n_episodes <= 0:

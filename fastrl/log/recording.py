@@ -91,9 +91,7 @@ class RunRecorder:
 
     def send_blueprint(self, n_episodes: int, irl: bool = False) -> None:
         """Send the layout the viewer opens with (scene + episode 0, image, curves, summary)."""
-        self.rec.send_blueprint(
-            run_blueprint(n_episodes, eye=self.eye, irl=irl), make_active=True, make_default=True
-        )
+        self.rec.send_blueprint(run_blueprint(n_episodes, eye=self.eye, irl=irl), make_active=True, make_default=True)
 
     def close(self) -> None:
         """Flush everything and close the file (idempotent)."""

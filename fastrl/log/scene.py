@@ -44,17 +44,25 @@ def _log_anatomy(rec: rr.RecordingStream, base: str, scene) -> None:
     """Each organ's mesh in its colour, named by its entity path."""
     for name, organ in scene.anatomy.items():
         verts, faces = organ_mesh(organ)
-        rec.log(f"{base}/anatomy/{name}", rr.Mesh3D(vertex_positions=verts, triangle_indices=faces.astype(np.uint32),
-                                                   albedo_factor=rgba(organ.rgba)), static=True)
+        rec.log(
+            f"{base}/anatomy/{name}",
+            rr.Mesh3D(vertex_positions=verts, triangle_indices=faces.astype(np.uint32), albedo_factor=rgba(organ.rgba)),
+            static=True,
+        )
 
 
-def _log_dome(rec: rr.RecordingStream, base: str, scene, scope_portal: str, shell_rgba=SHELL_RGBA,
-              plate_rgba=PLATE_RGBA, portal_rgba=PORTAL_RGBA) -> None:
+def _log_dome(
+    rec: rr.RecordingStream,
+    base: str,
+    scene,
+    scope_portal: str,
+    shell_rgba=SHELL_RGBA,
+    plate_rgba=PLATE_RGBA,
+    portal_rgba=PORTAL_RGBA,
+) -> None:
     """Shell with holes at the portals, base plate, and a labelled ring per portal."""
     r = scene.radius
-    holes = [
-        (geo.sphere_point(1.0, p.azimuth, p.elevation), 1.4 * p.radius / r) for p in scene.portals
-    ]
+    holes = [(geo.sphere_point(1.0, p.azimuth, p.elevation), 1.4 * p.radius / r) for p in scene.portals]
     verts, normals, tris = hemisphere(r, holes)
     # Only back faces: from outside, the near wall is culled and the inside of the dome shows.
     rec.log(
@@ -92,9 +100,7 @@ def _log_dome(rec: rr.RecordingStream, base: str, scene, scope_portal: str, shel
         labels.append(f"{p.name} (scope)" if p.name == scope_portal else p.name)
     rec.log(
         f"{base}/portals",
-        rr.LineStrips3D(
-            strips, radii=0.0012, colors=rgba(portal_rgba), labels=labels, show_labels=True
-        ),
+        rr.LineStrips3D(strips, radii=0.0012, colors=rgba(portal_rgba), labels=labels, show_labels=True),
         static=True,
     )
 

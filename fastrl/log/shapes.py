@@ -34,13 +34,9 @@ def hemisphere(
     i, j = np.meshgrid(np.arange(n_lat - 1), np.arange(n_lon), indexing="ij")
     a, b = i * n_lon + j, i * n_lon + (j + 1) % n_lon
     c, d = a + n_lon, b + n_lon
-    quads = np.concatenate(
-        [np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)]
-    )
+    quads = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
     top_a = (n_lat - 1) * n_lon + np.arange(n_lon)
-    cap = np.stack(
-        [top_a, (n_lat - 1) * n_lon + (np.arange(n_lon) + 1) % n_lon, np.full(n_lon, pole)], -1
-    )
+    cap = np.stack([top_a, (n_lat - 1) * n_lon + (np.arange(n_lon) + 1) % n_lon, np.full(n_lon, pole)], -1)
     tris = np.concatenate([quads, cap])
     if len(holes):
         centre = dirs[tris].mean(axis=1)

@@ -4,5 +4,14 @@ from .compiler import SCENES, CompiledTask, build_mjspec, compile_task, register
 from .scope import JOINTS, joint_ranges
 from .targets import Targets, resolve_targets
 
-__all__ = ["JOINTS", "SCENES", "CompiledTask", "Targets", "build_mjspec", "compile_task", "joint_ranges",
-           "register_scene", "resolve_targets"]
+__all__ = [
+    "JOINTS",
+    "SCENES",
+    "CompiledTask",
+    "Targets",
+    "build_mjspec",
+    "compile_task",
+    "joint_ranges",
+    "register_scene",
+    "resolve_targets",
+]

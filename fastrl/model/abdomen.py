@@ -17,14 +17,30 @@ TROCAR_RGBA = (0.2, 0.2, 0.22, 1.0)
 def build_abdomen(spec: mujoco.MjSpec, scene: AbdomenScene) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Add posterior wall, abdominal wall, trocars and organs; return {portal: (point, rotation)}."""
     r = scene.radius
-    spec.worldbody.add_geom(name="posterior_wall", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[r + 0.03, 0.005],
-                            pos=[0, 0, -0.005], rgba=FLOOR_RGBA, contype=WORLD_CONTYPE,
-                            conaffinity=WORLD_CONAFFINITY)
+    spec.worldbody.add_geom(
+        name="posterior_wall",
+        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+        size=[r + 0.03, 0.005],
+        pos=[0, 0, -0.005],
+        rgba=FLOOR_RGBA,
+        contype=WORLD_CONTYPE,
+        conaffinity=WORLD_CONAFFINITY,
+    )
     portals = add_shell(spec, scene, WALL_RGBA, TROCAR_RGBA)
     for name, organ in scene.anatomy.items():
         verts, faces = organ_mesh(organ)
-        spec.add_mesh(name=f"{name}_mesh", uservert=verts.ravel().tolist(), userface=faces.ravel().tolist(),
-                      inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL)
-        spec.worldbody.add_geom(name=f"organ_{name}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"{name}_mesh",
-                                rgba=organ.rgba, contype=WORLD_CONTYPE, conaffinity=WORLD_CONAFFINITY)
+        spec.add_mesh(
+            name=f"{name}_mesh",
+            uservert=verts.ravel().tolist(),
+            userface=faces.ravel().tolist(),
+            inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,
+        )
+        spec.worldbody.add_geom(
+            name=f"organ_{name}",
+            type=mujoco.mjtGeom.mjGEOM_MESH,
+            meshname=f"{name}_mesh",
+            rgba=organ.rgba,
+            contype=WORLD_CONTYPE,
+            conaffinity=WORLD_CONAFFINITY,
+        )
     return portals

@@ -48,9 +48,9 @@ def _read_mesh(path: str, scale: float, mtime: float) -> tuple[np.ndarray, np.nd
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     a, n = model.mesh_vertadr[0], model.mesh_vertnum[0]
-    verts = data.geom_xpos[0] + model.mesh_vert[a:a + n] @ data.geom_xmat[0].reshape(3, 3).T
+    verts = data.geom_xpos[0] + model.mesh_vert[a : a + n] @ data.geom_xmat[0].reshape(3, 3).T
     fa, fn = model.mesh_faceadr[0], model.mesh_facenum[0]
-    return verts, model.mesh_face[fa:fa + fn].copy()
+    return verts, model.mesh_face[fa : fa + fn].copy()
 
 
 def organ_mesh(organ) -> tuple[np.ndarray, np.ndarray]:

@@ -32,13 +32,13 @@ class CompiledTask:
     targets: Targets
     portal_point: np.ndarray
     portal_rot: np.ndarray
-    ranges: np.ndarray          # (5, 2) portal-coordinate limits
-    qadr: np.ndarray            # qpos addresses of the 5 portal joints
-    vadr: np.ndarray            # dof addresses
-    lens_qadr: int              # qpos address of the lens counter-rotation (= -cable)
+    ranges: np.ndarray  # (5, 2) portal-coordinate limits
+    qadr: np.ndarray  # qpos addresses of the 5 portal joints
+    vadr: np.ndarray  # dof addresses
+    lens_qadr: int  # qpos address of the lens counter-rotation (= -cable)
     camera: int
     tip_geom: int
-    avatar_geoms: np.ndarray    # (N, 2) disk and up-marker geom ids
+    avatar_geoms: np.ndarray  # (N, 2) disk and up-marker geom ids
     xml: str
 
 
@@ -76,11 +76,19 @@ def compile_task(task_spec: TaskSpec) -> CompiledTask:
     targets = resolve_targets(task_spec)
     jid = [model.joint(n).id for n in JOINTS]
     return CompiledTask(
-        spec=task_spec, model=model, targets=targets, portal_point=point, portal_rot=rot,
+        spec=task_spec,
+        model=model,
+        targets=targets,
+        portal_point=point,
+        portal_rot=rot,
         ranges=joint_ranges(task_spec.scope),
-        qadr=np.array([model.jnt_qposadr[j] for j in jid]), vadr=np.array([model.jnt_dofadr[j] for j in jid]),
-        lens_qadr=int(model.jnt_qposadr[model.joint("lens").id]), camera=model.camera("endoscope").id,
+        qadr=np.array([model.jnt_qposadr[j] for j in jid]),
+        vadr=np.array([model.jnt_dofadr[j] for j in jid]),
+        lens_qadr=int(model.jnt_qposadr[model.joint("lens").id]),
+        camera=model.camera("endoscope").id,
         tip_geom=model.geom("tip").id,
-        avatar_geoms=np.array([[model.geom(f"avatar_{i}").id, model.geom(f"avatar_{i}_up").id]
-                               for i in range(len(targets))]),
-        xml=spec.to_xml())
+        avatar_geoms=np.array(
+            [[model.geom(f"avatar_{i}").id, model.geom(f"avatar_{i}_up").id] for i in range(len(targets))]
+        ),
+        xml=spec.to_xml(),
+    )

@@ -35,12 +35,25 @@ def view_residuals(pos, rot, target, fwd_t, up_t, dist_mid, dist_span) -> np.nda
     local = rot.T @ d  # x right, y up, z backward
     ahead = -local[2]  # negative when the target is behind: the angles then exceed 90 degrees
     x_img, y_img = up_t @ rot[:, 0], up_t @ rot[:, 1]
-    return np.array([math.atan2(local[0], ahead), math.atan2(local[1], ahead), math.atan2(x_img, y_img),
-                     (np.linalg.norm(d) - dist_mid) / dist_span])
+    return np.array(
+        [
+            math.atan2(local[0], ahead),
+            math.atan2(local[1], ahead),
+            math.atan2(x_img, y_img),
+            (np.linalg.norm(d) - dist_mid) / dist_span,
+        ]
+    )
 
 
-def solve_view(kin: Kinematics, k: int, q0: np.ndarray, target=None, pivot_weight: float = 0.02,
-               margin: float = 0.008, cable_weight: float = 0.005) -> tuple[np.ndarray, float]:
+def solve_view(
+    kin: Kinematics,
+    k: int,
+    q0: np.ndarray,
+    target=None,
+    pivot_weight: float = 0.02,
+    margin: float = 0.008,
+    cable_weight: float = 0.005,
+) -> tuple[np.ndarray, float]:
     """Portal coordinates that centre, level and hold subtask k's avatar at mid distance, near q0."""
     task = kin.task
     t = task.targets
@@ -59,8 +72,7 @@ def solve_view(kin: Kinematics, k: int, q0: np.ndarray, target=None, pivot_weigh
 
     best = None
     retracted = lo[2] + 0.15 * (hi[2] - lo[2])  # a target behind the camera is ahead again once retracted
-    starts = [(dc, None) for dc in (0.0, math.pi / 2, -math.pi / 2, math.pi)] + [(0.0, retracted),
-                                                                                   (math.pi, retracted)]
+    starts = [(dc, None) for dc in (0.0, math.pi / 2, -math.pi / 2, math.pi)] + [(0.0, retracted), (math.pi, retracted)]
     for dcable, insertion in starts:
         start = np.clip(q0 + np.array([0, 0, 0, 0, dcable]), lo + 1e-6, hi - 1e-6)
         start[4] = (start[4] + math.pi) % (2 * math.pi) - math.pi

@@ -36,20 +36,21 @@ def shaft_pose(point: np.ndarray, rot: np.ndarray, portal: np.ndarray) -> tuple[
     return tip, pivot @ _rot(2, q[:, 3])
 
 
-def portal_from_shaft(point: np.ndarray, rot: np.ndarray, tip: np.ndarray,
-                      shaft: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def portal_from_shaft(
+    point: np.ndarray, rot: np.ndarray, tip: np.ndarray, shaft: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pitch, yaw, insertion, roll (T, 4) from tip positions and shaft rotations; also miss (m), angle (rad).
 
     Pitch, yaw and insertion come from the tip position (the line portal -> tip is the shaft axis), roll
     from the rotation about that axis. `miss` is how far the portal point lies from the shaft line of the
     rotation (through the tip along its z); `angle` is between that z and the direction portal -> tip.
     """
-    d = (np.asarray(tip, float) - point) @ rot            # portal -> tip in the pivot rest frame
+    d = (np.asarray(tip, float) - point) @ rot  # portal -> tip in the pivot rest frame
     insertion = np.linalg.norm(d, axis=1)
     axis = d / np.maximum(insertion, 1e-12)[:, None]
     yaw = np.arcsin(np.clip(axis[:, 0], -1.0, 1.0))
     pitch = np.arctan2(-axis[:, 1], axis[:, 2])
-    local = rot.T @ np.asarray(shaft, float)                # R0^T R
+    local = rot.T @ np.asarray(shaft, float)  # R0^T R
     n = np.swapaxes(_rot(0, pitch) @ _rot(1, yaw), 1, 2) @ local  # ~ Rz(roll)
     roll = np.arctan2(n[:, 1, 0] - n[:, 0, 1], n[:, 0, 0] + n[:, 1, 1])
     z = local[:, :, 2]
@@ -63,10 +64,14 @@ def quat_to_mat(q: np.ndarray) -> np.ndarray:
     """(T, 3, 3) rotations from (T, 4) quaternions w, x, y, z (normalised first)."""
     q = np.asarray(q, float)
     w, x, y, z = (q / np.linalg.norm(q, axis=1, keepdims=True)).T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], 1)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        1,
+    )
 
 
 def mat_to_quat(m: np.ndarray) -> np.ndarray:

@@ -31,42 +31,126 @@ def build_scope(spec: mujoco.MjSpec, scope: Scope, point: np.ndarray, rot: np.nd
     radius = 0.5 * scope.diameter
     pivot = spec.worldbody.add_body(name="scope_pivot", pos=point, quat=geo.mat_to_quat(rot), gravcomp=1)
     for name, axis, rng in (("pitch", [1, 0, 0], ranges[0]), ("yaw", [0, 1, 0], ranges[1])):
-        pivot.add_joint(name=name, type=HINGE, axis=axis, range=rng, limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                        damping=scope.damping, frictionloss=scope.frictionloss, armature=2e-3)
-    pivot.add_geom(name="pivot_mass", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[radius], mass=1e-3,
-                   contype=0, conaffinity=0, group=3)
+        pivot.add_joint(
+            name=name,
+            type=HINGE,
+            axis=axis,
+            range=rng,
+            limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+            damping=scope.damping,
+            frictionloss=scope.frictionloss,
+            armature=2e-3,
+        )
+    pivot.add_geom(
+        name="pivot_mass",
+        type=mujoco.mjtGeom.mjGEOM_SPHERE,
+        size=[radius],
+        mass=1e-3,
+        contype=0,
+        conaffinity=0,
+        group=3,
+    )
     shaft = pivot.add_body(name="scope_shaft", gravcomp=1)
-    shaft.add_joint(name="insertion", type=SLIDE, axis=[0, 0, 1], range=ranges[2],
-                    limited=mujoco.mjtLimited.mjLIMITED_TRUE, damping=10 * scope.damping,
-                    frictionloss=10 * scope.frictionloss, armature=2e-2)
-    shaft.add_joint(name="roll", type=HINGE, axis=[0, 0, 1], range=ranges[3],
-                    limited=mujoco.mjtLimited.mjLIMITED_TRUE, damping=0.1 * scope.damping, armature=1e-3)
-    shaft.add_geom(name="shaft", type=mujoco.mjtGeom.mjGEOM_CYLINDER, fromto=[0, 0, -scope.shaft_length, 0, 0, -radius],
-                   size=[radius, 0, 0], rgba=SHAFT_RGBA, mass=0.02, contype=0, conaffinity=0)
-    shaft.add_geom(name="tip", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[radius], rgba=SHAFT_RGBA, mass=1e-3,
-                   contype=TIP_CONTYPE, conaffinity=TIP_CONAFFINITY, condim=3)
+    shaft.add_joint(
+        name="insertion",
+        type=SLIDE,
+        axis=[0, 0, 1],
+        range=ranges[2],
+        limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+        damping=10 * scope.damping,
+        frictionloss=10 * scope.frictionloss,
+        armature=2e-2,
+    )
+    shaft.add_joint(
+        name="roll",
+        type=HINGE,
+        axis=[0, 0, 1],
+        range=ranges[3],
+        limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+        damping=0.1 * scope.damping,
+        armature=1e-3,
+    )
+    shaft.add_geom(
+        name="shaft",
+        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+        fromto=[0, 0, -scope.shaft_length, 0, 0, -radius],
+        size=[radius, 0, 0],
+        rgba=SHAFT_RGBA,
+        mass=0.02,
+        contype=0,
+        conaffinity=0,
+    )
+    shaft.add_geom(
+        name="tip",
+        type=mujoco.mjtGeom.mjGEOM_SPHERE,
+        size=[radius],
+        rgba=SHAFT_RGBA,
+        mass=1e-3,
+        contype=TIP_CONTYPE,
+        conaffinity=TIP_CONAFFINITY,
+        condim=3,
+    )
     optics = shaft.add_body(name="scope_optics")
-    optics.add_joint(name="cable", type=HINGE, axis=[0, 0, 1], range=ranges[4],
-                     limited=mujoco.mjtLimited.mjLIMITED_TRUE, damping=0.1 * scope.damping, armature=1e-3)
-    optics.add_geom(name="light_post", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.002, 0.006, 0.002],
-                    pos=[0, 0.008, -scope.shaft_length + 0.01], rgba=(0.2, 0.2, 0.2, 1), mass=1e-3,
-                    contype=0, conaffinity=0)
+    optics.add_joint(
+        name="cable",
+        type=HINGE,
+        axis=[0, 0, 1],
+        range=ranges[4],
+        limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+        damping=0.1 * scope.damping,
+        armature=1e-3,
+    )
+    optics.add_geom(
+        name="light_post",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[0.002, 0.006, 0.002],
+        pos=[0, 0.008, -scope.shaft_length + 0.01],
+        rgba=(0.2, 0.2, 0.2, 1),
+        mass=1e-3,
+        contype=0,
+        conaffinity=0,
+    )
     # The lens looks along the shaft tilted by the optics angle; turning the light cable sweeps it round a
     # cone while the image stays upright with the camera head: the lens counter-rotates about its own axis.
     th = math.radians(scope.optics_deg)
     lens = optics.add_body(name="scope_lens", quat=[math.cos(th / 2), math.sin(th / 2), 0, 0])
     lens.add_joint(name="lens", type=HINGE, axis=[0, 0, 1], range=[-2 * math.pi, 2 * math.pi], armature=1e-3)
-    lens.add_geom(name="lens_mass", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.5 * radius], mass=1e-4,
-                  contype=0, conaffinity=0, group=3)
-    spec.add_equality(name="lens_counter", type=mujoco.mjtEq.mjEQ_JOINT, name1="lens", name2="cable",
-                      data=[0, -1, 0, 0, 0] + [0] * 7)
+    lens.add_geom(
+        name="lens_mass",
+        type=mujoco.mjtGeom.mjGEOM_SPHERE,
+        size=[0.5 * radius],
+        mass=1e-4,
+        contype=0,
+        conaffinity=0,
+        group=3,
+    )
+    spec.add_equality(
+        name="lens_counter", type=mujoco.mjtEq.mjEQ_JOINT, name1="lens", name2="cable", data=[0, -1, 0, 0, 0] + [0] * 7
+    )
     lens.add_camera(name="endoscope", pos=[0, 0, 0], quat=geo.mat_to_quat(LENS_CAMERA), fovy=scope.fov_deg)
-    lens.add_light(name="scope_light", pos=[0, 0, 0], dir=[0, 0, 1], castshadow=False,
-                   diffuse=[0.9, 0.9, 0.85], attenuation=[0.3, 8.0, 0.0], cutoff=0.6 * scope.fov_deg + 10,
-                   exponent=2)
-    gains = {"pitch": (3.0, 0.12), "yaw": (3.0, 0.12), "insertion": (80.0, 2.5), "roll": (0.6, 0.04),
-             "cable": (0.6, 0.04)}
+    lens.add_light(
+        name="scope_light",
+        pos=[0, 0, 0],
+        dir=[0, 0, 1],
+        castshadow=False,
+        diffuse=[0.9, 0.9, 0.85],
+        attenuation=[0.3, 8.0, 0.0],
+        cutoff=0.6 * scope.fov_deg + 10,
+        exponent=2,
+    )
+    gains = {
+        "pitch": (3.0, 0.12),
+        "yaw": (3.0, 0.12),
+        "insertion": (80.0, 2.5),
+        "roll": (0.6, 0.04),
+        "cable": (0.6, 0.04),
+    }
     for name, rng in zip(JOINTS, ranges):
-        act = spec.add_actuator(name=f"servo_{name}", target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT,
-                                ctrlrange=rng, ctrllimited=mujoco.mjtLimited.mjLIMITED_TRUE)
+        act = spec.add_actuator(
+            name=f"servo_{name}",
+            target=name,
+            trntype=mujoco.mjtTrn.mjTRN_JOINT,
+            ctrlrange=rng,
+            ctrllimited=mujoco.mjtLimited.mjLIMITED_TRUE,
+        )
         act.set_to_position(kp=gains[name][0], kv=gains[name][1])

@@ -47,14 +47,26 @@ def outputs_for(output: Path | None, run: Path | None) -> dict[str, Path]:
     if output is None:
         output = (run / "assessment" if run is not None else Path("assessment")) / "scores.json"
     stem, parent = output.stem, output.parent
-    return {"json": output, "csv": parent / f"{stem}.csv", "paths": parent / f"{stem}_paths.png",
-            "deviation": parent / f"{stem}_deviation.png", "distributions": parent / f"{stem}_distributions.png",
-            "rrd": parent / f"{stem}.rrd"}
+    return {
+        "json": output,
+        "csv": parent / f"{stem}.csv",
+        "paths": parent / f"{stem}_paths.png",
+        "deviation": parent / f"{stem}_deviation.png",
+        "distributions": parent / f"{stem}_distributions.png",
+        "rrd": parent / f"{stem}.rrd",
+    }
 
 
-def assess(inputs: list[Path], run: Path | None = None, spec_path: Path | None = None, output: Path | None = None,
-           reference_episodes: int = 3, pictures: bool = True, console: Console | None = None,
-           progress: bool = True) -> Assessment:
+def assess(
+    inputs: list[Path],
+    run: Path | None = None,
+    spec_path: Path | None = None,
+    output: Path | None = None,
+    reference_episodes: int = 3,
+    pictures: bool = True,
+    console: Console | None = None,
+    progress: bool = True,
+) -> Assessment:
     """Score every trajectory file under `inputs` and write the report and its pictures."""
     console = console or Console(stderr=True)
     scorer, recording_id = load_scorer(run, spec_path)
@@ -65,8 +77,15 @@ def assess(inputs: list[Path], run: Path | None = None, spec_path: Path | None =
     seconds["references"] = time.perf_counter() - t0
     files = trajectory_files(inputs)
     t0 = time.perf_counter()
-    with Progress(TextColumn("scoring"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=console,
-                  disable=not progress, transient=True) as bar:
+    with Progress(
+        TextColumn("scoring"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=console,
+        disable=not progress,
+        transient=True,
+    ) as bar:
         task = bar.add_task("score", total=len(files))
         scored, problems = score_files(scorer, files, on_file=lambda _f: bar.advance(task))
     normalise(scored, references)
@@ -86,8 +105,9 @@ def assess(inputs: list[Path], run: Path | None = None, spec_path: Path | None =
     return result
 
 
-def _pictures(scorer: Scorer, scored, report: dict, paths: dict[str, Path], recording_id: str,
-              result: Assessment) -> None:
+def _pictures(
+    scorer: Scorer, scored, report: dict, paths: dict[str, Path], recording_id: str, result: Assessment
+) -> None:
     """PNG figures and the Rerun recording of the assessment."""
     from ..log.assessment import log_assessment
 
@@ -96,5 +116,6 @@ def _pictures(scorer: Scorer, scored, report: dict, paths: dict[str, Path], reco
     result.files["paths"] = plot_paths(scored, by, paths["paths"], scorer.spec.scene.radius)
     result.files["deviation"] = plot_deviation(scored, devs, by, paths["deviation"])
     result.files["distributions"] = plot_distributions(report, paths["distributions"])
-    result.files["rrd"] = log_assessment(paths["rrd"], recording_id, scorer.env.task, scored, report, devs,
-                                         lambda s: group_of(s, by))
+    result.files["rrd"] = log_assessment(
+        paths["rrd"], recording_id, scorer.env.task, scored, report, devs, lambda s: group_of(s, by)
+    )

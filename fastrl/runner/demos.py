@@ -14,8 +14,15 @@ from ..spec.models import TaskSpec
 from .saved import load_policy
 
 
-def write_demos(out: Path, n: int, seed: int = 0, run: Path | None = None, expert_spec: Path | TaskSpec | None = None,
-                overrides=(), progress: bool = True) -> list[Path]:
+def write_demos(
+    out: Path,
+    n: int,
+    seed: int = 0,
+    run: Path | None = None,
+    expert_spec: Path | TaskSpec | None = None,
+    overrides=(),
+    progress: bool = True,
+) -> list[Path]:
     """Write n trajectories (seeds seed..seed+n-1) from a run's policy or the scripted expert (spec or its file)."""
     if run is not None:
         spec, policy = load_policy(run)

@@ -11,8 +11,9 @@ from ..data.episode import EpisodeRecord
 Policy = Callable[[np.ndarray], object]
 
 
-def record_episode(env, policy: Policy, seed: int, image_every: int = 0,
-                   on_reset: Callable | None = None) -> EpisodeRecord:
+def record_episode(
+    env, policy: Policy, seed: int, image_every: int = 0, on_reset: Callable | None = None
+) -> EpisodeRecord:
     """Run one episode from `seed`; keep poses, rewards, features, cues and every k-th endoscope image."""
     u = env.unwrapped
     obs, info = env.reset(seed=seed)
@@ -25,8 +26,20 @@ def record_episode(env, policy: Policy, seed: int, image_every: int = 0,
     def snapshot(reward: float, info: dict) -> None:
         s = u.state
         axis = u.data.xmat[shaft].reshape(3, 3)[:, 2]
-        rows.append((s.time, s.portal, s.tip_pos, s.tip_quat, u.data.xpos[shaft] - length * axis, reward,
-                     list(info["features"].values()), info["subtask"], info["cue"]["green"], info["contacts"]))
+        rows.append(
+            (
+                s.time,
+                s.portal,
+                s.tip_pos,
+                s.tip_quat,
+                u.data.xpos[shaft] - length * axis,
+                reward,
+                list(info["features"].values()),
+                info["subtask"],
+                info["cue"]["green"],
+                info["contacts"],
+            )
+        )
         if image_every and (len(rows) - 1) % image_every == 0:
             images[len(rows) - 1] = u.render_views(outside=False)["endoscope"]
 
@@ -42,11 +55,22 @@ def record_episode(env, policy: Policy, seed: int, image_every: int = 0,
     names = u.feature_names
     feats = np.array(cols[6], float).reshape(len(rows), len(names))
     return EpisodeRecord(
-        seed=seed, time=np.array(cols[0]), portal=np.array(cols[1]), tip_pos=np.array(cols[2]),
-        tip_quat=np.array(cols[3]), shaft_end=np.array(cols[4]), reward=np.array(cols[5]),
-        features={n: feats[:, i] for i, n in enumerate(names)}, subtask=np.array(cols[7]),
-        green=np.array(cols[8], bool), contacts=np.array(cols[9]), actions=np.array(actions),
-        images=images, subtasks_total=info["subtasks_total"], success=bool(info["success"]))
+        seed=seed,
+        time=np.array(cols[0]),
+        portal=np.array(cols[1]),
+        tip_pos=np.array(cols[2]),
+        tip_quat=np.array(cols[3]),
+        shaft_end=np.array(cols[4]),
+        reward=np.array(cols[5]),
+        features={n: feats[:, i] for i, n in enumerate(names)},
+        subtask=np.array(cols[7]),
+        green=np.array(cols[8], bool),
+        contacts=np.array(cols[9]),
+        actions=np.array(actions),
+        images=images,
+        subtasks_total=info["subtasks_total"],
+        success=bool(info["success"]),
+    )
 
 
 def summarize(episodes: list[EpisodeRecord]) -> dict:
@@ -67,8 +91,15 @@ def summarize(episodes: list[EpisodeRecord]) -> dict:
     }
 
 
-def evaluate(env, policy: Policy, seeds: list[int], image_every: int = 0, record: int = 0,
-             on_reset: Callable | None = None, on_episode: Callable | None = None) -> tuple[dict, list[EpisodeRecord]]:
+def evaluate(
+    env,
+    policy: Policy,
+    seeds: list[int],
+    image_every: int = 0,
+    record: int = 0,
+    on_reset: Callable | None = None,
+    on_episode: Callable | None = None,
+) -> tuple[dict, list[EpisodeRecord]]:
     """Deterministic episodes on the given seeds; images only for the first `record` episodes."""
     episodes = []
     for i, seed in enumerate(seeds):

@@ -25,8 +25,9 @@ METRICS = ("economy", "safety")
 LEARNED = ("reward", "value")
 
 
-def start_experiment(spec_path, overrides=(), root="runs", console: Console | None = None,
-                     progress: bool = True) -> Path:
+def start_experiment(
+    spec_path, overrides=(), root="runs", console: Console | None = None, progress: bool = True
+) -> Path:
     """Run the spec's experiment in a new run directory; return it."""
     spec = load_spec(spec_path, overrides)
     task = compile_task(spec)
@@ -66,8 +67,9 @@ def run_experiment(run: Path, console: Console, progress: bool) -> Path:
     from ..log.experiment import log_experiment, plot_correlations
 
     plot_correlations(result, run / "table3.png")
-    log_experiment(run / "recording.rrd", run.name, compile_task(spec), scored, learned, result,
-                   figure=run / "table3.png")
+    log_experiment(
+        run / "recording.rrd", run.name, compile_task(spec), scored, learned, result, figure=run / "table3.png"
+    )
     update_meta(run, status="done", seconds=timings)
     return run
 
@@ -114,10 +116,16 @@ def train_irl(run: Path, algo: str, console: Console, progress: bool) -> Path:
     if sub.exists():
         shutil.rmtree(sub)  # started but not one checkpoint written: start again
     spec = load_spec(run / "spec.yaml")
-    console.print(f"[bold]{algo.upper()}[/bold] on the {spec.experiment.best} best procedures, "
-                  f"{spec.experiment.timesteps:,} generator steps")
-    overrides = [f"irl.algorithm={algo}", f"irl.demonstrations.path={run / 'best'}",
-                 f"train.timesteps={spec.experiment.timesteps}", "experiment.enabled=false"]
+    console.print(
+        f"[bold]{algo.upper()}[/bold] on the {spec.experiment.best} best procedures, "
+        f"{spec.experiment.timesteps:,} generator steps"
+    )
+    overrides = [
+        f"irl.algorithm={algo}",
+        f"irl.demonstrations.path={run / 'best'}",
+        f"train.timesteps={spec.experiment.timesteps}",
+        "experiment.enabled=false",
+    ]
     return start_run(run / "spec.yaml", overrides, console=console, progress=progress, into=sub)
 
 
@@ -134,8 +142,15 @@ def _score_all(scorer: Scorer, cohort, label: str, console: Console, progress: b
 
 def _bar(console: Console, progress: bool) -> Progress:
     """A transient progress bar."""
-    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                    console=console, disable=not progress, transient=True)
+    return Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=console,
+        disable=not progress,
+        transient=True,
+    )
 
 
 def correlation(x, y) -> dict:
@@ -147,25 +162,53 @@ def correlation(x, y) -> dict:
     return {"rho": float(r.statistic), "p": float(r.pvalue)}
 
 
-def experiment_result(spec: TaskSpec, heuristic: list[TrajectoryScores], learned: dict, best: list[str],
-                      timings: dict) -> dict:
+def experiment_result(
+    spec: TaskSpec, heuristic: list[TrajectoryScores], learned: dict, best: list[str], timings: dict
+) -> dict:
     """Table 3 (learned reward and value against economy and safety) and the per-procedure figures."""
-    rows = [{"name": s.name, "skill": s.skill, "heuristic": s.scores["heuristic"], "subtasks": s.scores["subtasks"],
-             "time": s.scores["time"], **{k: s.scores[k] for k in (*METRICS, "contacts")}, "best": s.name in best}
-            for s in heuristic]
+    rows = [
+        {
+            "name": s.name,
+            "skill": s.skill,
+            "heuristic": s.scores["heuristic"],
+            "subtasks": s.scores["subtasks"],
+            "time": s.scores["time"],
+            **{k: s.scores[k] for k in (*METRICS, "contacts")},
+            "best": s.name in best,
+        }
+        for s in heuristic
+    ]
     for algo, scored in learned.items():
         for row, s in zip(rows, scored):
             row.update({f"{algo}_{k}": s.scores[k] for k in LEARNED})
-    table = {algo: {f"{k}-{m}": correlation([r[f"{algo}_{k}"] for r in rows], [r[m] for r in rows])
-                    for k in LEARNED for m in METRICS} for algo in learned}
-    table["heuristic"] = {f"heuristic-{m}": correlation([r["heuristic"] for r in rows], [r[m] for r in rows])
-                          for m in METRICS}
-    skill = {algo: {k: correlation([r[f"{algo}_{k}"] for r in rows], [r["skill"] for r in rows]) for k in LEARNED}
-             for algo in learned}
-    return {"spec": spec.name, "n": len(rows), "best": best, "table3": table, "against_skill": skill,
-            "metrics": {"economy": "total camera distance inside the cavity (m)",
-                        "safety": "sum over samples of the camera's distance to the closest anatomy vertex (m)",
-                        "contacts": "samples with the scope touching anatomy or walls",
-                        "reward": "sum of the learned reward r_psi over the procedure",
-                        "value": "mean learned value V over the procedure"},
-            "seconds": timings, "procedures": rows}
+    table = {
+        algo: {
+            f"{k}-{m}": correlation([r[f"{algo}_{k}"] for r in rows], [r[m] for r in rows])
+            for k in LEARNED
+            for m in METRICS
+        }
+        for algo in learned
+    }
+    table["heuristic"] = {
+        f"heuristic-{m}": correlation([r["heuristic"] for r in rows], [r[m] for r in rows]) for m in METRICS
+    }
+    skill = {
+        algo: {k: correlation([r[f"{algo}_{k}"] for r in rows], [r["skill"] for r in rows]) for k in LEARNED}
+        for algo in learned
+    }
+    return {
+        "spec": spec.name,
+        "n": len(rows),
+        "best": best,
+        "table3": table,
+        "against_skill": skill,
+        "metrics": {
+            "economy": "total camera distance inside the cavity (m)",
+            "safety": "sum over samples of the camera's distance to the closest anatomy vertex (m)",
+            "contacts": "samples with the scope touching anatomy or walls",
+            "reward": "sum of the learned reward r_psi over the procedure",
+            "value": "mean learned value V over the procedure",
+        },
+        "seconds": timings,
+        "procedures": rows,
+    }

@@ -56,8 +56,16 @@ class Learner:
             if self.model.num_timesteps == 0:
                 bc = self.spec.irl.bc
                 obs, actions = demonstration_pairs(FastEnv(self.spec), self.demos)
-                behaviour_clone(self.model, self.venv, obs, actions, bc.epochs, bc.batch_size, bc.learning_rate,
-                                self.spec.train.seed)
+                behaviour_clone(
+                    self.model,
+                    self.venv,
+                    obs,
+                    actions,
+                    bc.epochs,
+                    bc.batch_size,
+                    bc.learning_rate,
+                    self.spec.train.seed,
+                )
             return
         self.model.learn(timesteps, callback=[*self.callbacks, monitor], reset_num_timesteps=False)
 
@@ -116,22 +124,53 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     demos = demonstrations(spec, run, console, progress)
     d = irl.discriminator
     obs_dim = venv.observation_space.shape[0]
-    disc = Discriminator(obs_dim, irl.algorithm, spec.train.params().gamma, tuple(d.hidden), d.spectral_norm,
-                         d.absorbing, d.shaped, not off_policy if d.policy_term is None else d.policy_term,
-                         spec.discriminator_inputs(), spec.reward_inputs())
+    disc = Discriminator(
+        obs_dim,
+        irl.algorithm,
+        spec.train.params().gamma,
+        tuple(d.hidden),
+        d.spectral_norm,
+        d.absorbing,
+        d.shaped,
+        not off_policy if d.policy_term is None else d.policy_term,
+        spec.discriminator_inputs(),
+        spec.reward_inputs(),
+    )
     env = FastEnv(spec)
     transitions = expert_transitions(env, demos)
     ranked = None
     if d.ranking and disc.shaped and not off_policy:
         ranked = RankedRollouts(env, d.ranking_noise, d.ranking_episodes, repeat=d.ranking_repeat)
     elif d.ranking and irl.algorithm == "airl":  # GAIL has no r_psi to rank, so it goes without a word
-        console.print("[dim]irl.discriminator.ranking: the ranking prior is for shaped AIRL on PPO; "
-                      "this run goes without it[/]")
+        console.print(
+            "[dim]irl.discriminator.ranking: the ranking prior is for shaped AIRL on PPO; this run goes without it[/]"
+        )
     if off_policy:
-        cb = OffPolicyAdversarialCallback(disc, transitions, d.current_rollout, d.steps, d.batch_size,
-                                          d.learning_rate, spec.train.seed, d.every, d.gradient_penalty)
+        cb = OffPolicyAdversarialCallback(
+            disc,
+            transitions,
+            d.current_rollout,
+            d.steps,
+            d.batch_size,
+            d.learning_rate,
+            spec.train.seed,
+            d.every,
+            d.gradient_penalty,
+        )
     else:
-        cb = AdversarialCallback(disc, transitions, d.epochs, d.batch_size, d.learning_rate, spec.train.seed,
-                                 d.entropy, d.history, d.scale_reward, d.gradient_penalty, ranked, d.ranking)
+        cb = AdversarialCallback(
+            disc,
+            transitions,
+            d.epochs,
+            d.batch_size,
+            d.learning_rate,
+            spec.train.seed,
+            d.entropy,
+            d.history,
+            d.scale_reward,
+            d.gradient_penalty,
+            ranked,
+            d.ranking,
+        )
     averaging = RewardAveraging(disc, d.average_every) if d.average_every and disc.shaped else None
     return Learner(spec, venv, model, [cb, *([averaging] if averaging else [])], disc, demos, averaging)

@@ -26,10 +26,22 @@ class TrainingMonitor(BaseCallback):
     evaluation's subtask share reaches `stop_at`.
     """
 
-    def __init__(self, run: Path, feature_names: list[str], total: int, log_every: int, checkpoint_every: int,
-                 recorder=None, progress: bool = True, keep_checkpoints: int = 3,
-                 stats: Callable[[], dict] | None = None, parts: dict | None = None,
-                 evaluator: Callable[[], dict] | None = None, eval_every: int = 0, stop_at: float | None = None):
+    def __init__(
+        self,
+        run: Path,
+        feature_names: list[str],
+        total: int,
+        log_every: int,
+        checkpoint_every: int,
+        recorder=None,
+        progress: bool = True,
+        keep_checkpoints: int = 3,
+        stats: Callable[[], dict] | None = None,
+        parts: dict | None = None,
+        evaluator: Callable[[], dict] | None = None,
+        eval_every: int = 0,
+        stop_at: float | None = None,
+    ):
         super().__init__()
         self.run, self.names, self.total = run, feature_names, total
         self.log_every, self.checkpoint_every, self.keep = log_every, checkpoint_every, keep_checkpoints
@@ -44,9 +56,16 @@ class TrainingMonitor(BaseCallback):
         self.next_log = self.next_ckpt = self.next_tick = 0
         self.started = time.perf_counter()
         self.start_steps = 0
-        self.progress = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-                                 TextColumn("{task.fields[rate]:>6} steps/s"), TimeElapsedColumn(),
-                                 TimeRemainingColumn(), TextColumn("{task.fields[status]}"), disable=not progress)
+        self.progress = Progress(
+            TextColumn("[bold]{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("{task.fields[rate]:>6} steps/s"),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            TextColumn("{task.fields[status]}"),
+            disable=not progress,
+        )
         self.task_id = None
 
     def _on_training_start(self) -> None:
@@ -58,8 +77,9 @@ class TrainingMonitor(BaseCallback):
         self.next_ckpt = self.num_timesteps + self.checkpoint_every
         self.next_eval = self.num_timesteps + self.eval_every
         self.progress.start()
-        self.task_id = self.progress.add_task("training", total=self.total, completed=self.num_timesteps,
-                                              rate="-", status="")
+        self.task_id = self.progress.add_task(
+            "training", total=self.total, completed=self.num_timesteps, rate="-", status=""
+        )
 
     def _on_step(self) -> bool:
         env = self.training_env
@@ -68,9 +88,13 @@ class TrainingMonitor(BaseCallback):
         for i, (info, done) in enumerate(zip(self.locals["infos"], self.locals["dones"])):
             self.feats[i] += [info["features"][n] for n in self.names]
             if done:
-                ep = {"return": float(self.ret[i]), "success": float(info["success"]),
-                      "subtasks": info["subtask"] / max(1, info["subtasks_total"]), "time": info["time"],
-                      "features": self.feats[i].copy()}
+                ep = {
+                    "return": float(self.ret[i]),
+                    "success": float(info["success"]),
+                    "subtasks": info["subtask"] / max(1, info["subtasks_total"]),
+                    "time": info["time"],
+                    "features": self.feats[i].copy(),
+                }
                 self.recent.append(ep)
                 self.window.append(ep)
                 self.episodes += 1
@@ -109,10 +133,14 @@ class TrainingMonitor(BaseCallback):
         if self.stats is not None:
             m.update({k: float(v) for k, v in self.stats().items() if math.isfinite(v)})
         if eps:
-            m.update({"episode/return": float(np.mean([e["return"] for e in eps])),
-                      "episode/success_rate": float(np.mean([e["success"] for e in eps])),
-                      "episode/subtasks": float(np.mean([e["subtasks"] for e in eps])),
-                      "episode/time": float(np.mean([e["time"] for e in eps]))})
+            m.update(
+                {
+                    "episode/return": float(np.mean([e["return"] for e in eps])),
+                    "episode/success_rate": float(np.mean([e["success"] for e in eps])),
+                    "episode/subtasks": float(np.mean([e["subtasks"] for e in eps])),
+                    "episode/time": float(np.mean([e["time"] for e in eps])),
+                }
+            )
             feats = np.mean([e["features"] for e in eps], axis=0)
             m.update({f"features/{n}": float(v) for n, v in zip(self.names, feats)})
         for key, value in self.model.logger.name_to_value.items():
@@ -129,9 +157,14 @@ class TrainingMonitor(BaseCallback):
 
     def checkpoint(self) -> Path:
         """Save a checkpoint and keep only the newest few."""
-        path = save_checkpoint(self.run / "checkpoints" / f"{self.num_timesteps:010d}", self.model,
-                               self.training_env, {"episodes": self.episodes}, self.parts)
-        old = sorted((self.run / "checkpoints").glob("[0-9]*"))[:-self.keep]
+        path = save_checkpoint(
+            self.run / "checkpoints" / f"{self.num_timesteps:010d}",
+            self.model,
+            self.training_env,
+            {"episodes": self.episodes},
+            self.parts,
+        )
+        old = sorted((self.run / "checkpoints").glob("[0-9]*"))[: -self.keep]
         for p in old:
             shutil.rmtree(p, ignore_errors=True)
         return path

@@ -40,8 +40,14 @@ class EvaluationInterrupted(Exception):
         self.run = run
 
 
-def start_run(spec_path, overrides=(), root="runs", console: Console | None = None, progress: bool = True,
-              into: Path | None = None) -> Path:
+def start_run(
+    spec_path,
+    overrides=(),
+    root="runs",
+    console: Console | None = None,
+    progress: bool = True,
+    into: Path | None = None,
+) -> Path:
     """Train, evaluate and record a new run of a spec file (in `into` if given); return its directory."""
     spec = load_spec(spec_path, overrides)
     task = compile_task(spec)
@@ -78,17 +84,23 @@ def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resuming: bool
     recorder.log_scene(task)
     recorder.send_blueprint(min(spec.evaluate.record_episodes, spec.evaluate.episodes), spec.irl.enabled)
     if resuming:
-        history = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines() if line.strip()] \
-            if (run / "metrics.jsonl").exists() else []
+        history = (
+            [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines() if line.strip()]
+            if (run / "metrics.jsonl").exists()
+            else []
+        )
         if history:
             keys = sorted({k for row in history for k in row} - {"timesteps"})
-            recorder.log_training_columns(np.array([r["timesteps"] for r in history]),
-                                          {k: np.array([r.get(k, np.nan) for r in history], float) for k in keys})
+            recorder.log_training_columns(
+                np.array([r["timesteps"] for r in history]),
+                {k: np.array([r.get(k, np.nan) for r in history], float) for k in keys},
+            )
     return recorder
 
 
-def _train_and_evaluate(run: Path, spec: TaskSpec, task: CompiledTask, ckpt: Path | None, console: Console,
-                        progress: bool) -> Path:
+def _train_and_evaluate(
+    run: Path, spec: TaskSpec, task: CompiledTask, ckpt: Path | None, console: Console, progress: bool
+) -> Path:
     """Train (from a checkpoint if given), save, evaluate agent and expert, write eval.json and the recording."""
     learner = build_learner(spec, run, console, progress)
     model, venv = learner.model, learner.venv
@@ -96,10 +108,21 @@ def _train_and_evaluate(run: Path, spec: TaskSpec, task: CompiledTask, ckpt: Pat
     recorder = _open_recorder(run, spec, task, resuming=ckpt is not None)
     try:
         ev = spec.evaluate
-        monitor = TrainingMonitor(run, list(spec.reward.features), spec.train.timesteps, spec.train.log_every,
-                                  spec.train.checkpoint_every, recorder, progress, spec.train.keep_checkpoints,
-                                  learner.stats, learner.parts, periodic_evaluator(spec, model, venv),
-                                  ev.periodic_every, ev.stop_at_subtasks)
+        monitor = TrainingMonitor(
+            run,
+            list(spec.reward.features),
+            spec.train.timesteps,
+            spec.train.log_every,
+            spec.train.checkpoint_every,
+            recorder,
+            progress,
+            spec.train.keep_checkpoints,
+            learner.stats,
+            learner.parts,
+            periodic_evaluator(spec, model, venv),
+            ev.periodic_every,
+            ev.stop_at_subtasks,
+        )
         monitor.episodes = before.get("episodes", 0)
         seconds = before.get("train_seconds", 0.0)
         remaining = spec.train.timesteps - model.num_timesteps
@@ -110,8 +133,13 @@ def _train_and_evaluate(run: Path, spec: TaskSpec, task: CompiledTask, ckpt: Pat
         except KeyboardInterrupt:
             monitor.progress.stop()
             seconds += time.perf_counter() - t0
-            save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv,
-                            {"episodes": monitor.episodes, "train_seconds": seconds}, learner.parts)
+            save_checkpoint(
+                run / "checkpoints" / f"{model.num_timesteps:010d}",
+                model,
+                venv,
+                {"episodes": monitor.episodes, "train_seconds": seconds},
+                learner.parts,
+            )
             update_meta(run, status="interrupted", trained_timesteps=int(model.num_timesteps), train_seconds=seconds)
             raise RunInterrupted(run, int(model.num_timesteps)) from None
         seconds += time.perf_counter() - t0
@@ -119,8 +147,14 @@ def _train_and_evaluate(run: Path, spec: TaskSpec, task: CompiledTask, ckpt: Pat
         save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state, learner.parts)
         save_checkpoint(run / "final", model, venv, state, learner.parts)
         save_networks(run / "networks", model, venv, learner.disc, spec.train.params().gamma, learner.snapshots)
-        update_meta(run, status="evaluating", trained_timesteps=int(model.num_timesteps), train_seconds=seconds,
-                    train_fps=model.num_timesteps / max(seconds, 1e-9), stopped_early=monitor.stopped_early)
+        update_meta(
+            run,
+            status="evaluating",
+            trained_timesteps=int(model.num_timesteps),
+            train_seconds=seconds,
+            train_fps=model.num_timesteps / max(seconds, 1e-9),
+            stopped_early=monitor.stopped_early,
+        )
         try:
             results = evaluate_run(spec, policy_function(model, venv), recorder, console)
         except KeyboardInterrupt:
@@ -143,8 +177,12 @@ def periodic_evaluator(spec: TaskSpec, model, venv):
 
     def run_evaluation() -> dict[str, float]:
         summary, _ = evaluate(env, policy_function(model, venv), seeds)
-        return {"eval/success_rate": summary["success_rate"], "eval/subtasks": summary["subtasks_completed"],
-                "eval/return": summary["return_mean"], "eval/episode_time": summary["episode_time_mean"]}
+        return {
+            "eval/success_rate": summary["success_rate"],
+            "eval/subtasks": summary["subtasks_completed"],
+            "eval/return": summary["return_mean"],
+            "eval/episode_time": summary["episode_time_mean"],
+        }
 
     return run_evaluation
 

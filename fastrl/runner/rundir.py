@@ -22,8 +22,11 @@ def new_run_dir(root: Path, spec: TaskSpec, label: str | None = None) -> Path:
     """runs/<spec name>/<UTC timestamp>-<algo>-s<seed>/ (algo e.g. ppo, airl-ppo, bc) or <timestamp>-<label>/,
     made unique if it exists."""
     stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
-    algo = spec.train.algo.lower() if not spec.irl.enabled else (
-        "bc" if spec.irl.algorithm == "bc" else f"{spec.irl.algorithm}-{spec.train.algo.lower()}")
+    algo = (
+        spec.train.algo.lower()
+        if not spec.irl.enabled
+        else ("bc" if spec.irl.algorithm == "bc" else f"{spec.irl.algorithm}-{spec.train.algo.lower()}")
+    )
     base = Path(root) / spec.name / (f"{stamp}-{label}" if label else f"{stamp}-{algo}-s{spec.train.seed}")
     path, k = base, 1
     while path.exists():
@@ -45,8 +48,13 @@ def git_commit() -> str | None:
     root = Path(__file__).resolve().parents[2]
     try:
         head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, timeout=5)
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root,
-                               capture_output=True, text=True, timeout=5)
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            timeout=5,
+        )
     except (OSError, subprocess.SubprocessError):
         return None
     if head.returncode != 0:
@@ -63,12 +71,19 @@ def write_meta(run: Path, spec: TaskSpec, source: str, extra: dict | None = None
         except metadata.PackageNotFoundError:
             versions[pkg] = None
     meta = {
-        "spec_name": spec.name, "spec_hash": spec_hash(spec), "spec_source": source,
-        "algo": spec.train.algo, "seed": spec.train.seed, "timesteps": spec.train.timesteps,
-        "command": sys.argv, "git_commit": git_commit(), "python": sys.version.split()[0],
-        "versions": versions, "machine": {"platform": platform.platform(), "processor": platform.processor(),
-                                          "cpus": _cpu_count()},
-        "started_utc": datetime.now(UTC).isoformat(timespec="seconds"), **(extra or {}),
+        "spec_name": spec.name,
+        "spec_hash": spec_hash(spec),
+        "spec_source": source,
+        "algo": spec.train.algo,
+        "seed": spec.train.seed,
+        "timesteps": spec.train.timesteps,
+        "command": sys.argv,
+        "git_commit": git_commit(),
+        "python": sys.version.split()[0],
+        "versions": versions,
+        "machine": {"platform": platform.platform(), "processor": platform.processor(), "cpus": _cpu_count()},
+        "started_utc": datetime.now(UTC).isoformat(timespec="seconds"),
+        **(extra or {}),
     }
     (run / "meta.json").write_text(json.dumps(meta, indent=2))
     return meta
@@ -103,11 +118,20 @@ def list_runs(root: Path) -> list[dict]:
                 ev = json.loads((run / "eval.json").read_text()).get("agent", {})
             except (OSError, json.JSONDecodeError):
                 ev = {}
-        rows.append({"run": str(run), "spec": meta.get("spec_name"), "algo": meta.get("algo"),
-                     "seed": meta.get("seed"), "status": meta.get("status", "?"),
-                     "timesteps": meta.get("trained_timesteps"), "wall_s": meta.get("train_seconds"),
-                     "success": ev.get("success_rate"), "subtasks": ev.get("subtasks_completed"),
-                     "started": meta.get("started_utc", "")})
+        rows.append(
+            {
+                "run": str(run),
+                "spec": meta.get("spec_name"),
+                "algo": meta.get("algo"),
+                "seed": meta.get("seed"),
+                "status": meta.get("status", "?"),
+                "timesteps": meta.get("trained_timesteps"),
+                "wall_s": meta.get("train_seconds"),
+                "success": ev.get("success_rate"),
+                "subtasks": ev.get("subtasks_completed"),
+                "started": meta.get("started_utc", ""),
+            }
+        )
     return sorted(rows, key=lambda r: r["started"], reverse=True)
 
 

@@ -31,6 +31,22 @@ def json_schema() -> dict:
     return TaskSpec.model_json_schema()
 
 
-__all__ = ["Avatar", "Cue", "DomeScene", "Line", "Portal", "Scope", "SpecError", "SpecIssue", "Task",
-           "TaskSpec", "apply_overrides", "json_schema", "load_model", "load_spec", "read_yaml", "spec_hash",
-           "task_hash"]
+__all__ = [
+    "Avatar",
+    "Cue",
+    "DomeScene",
+    "Line",
+    "Portal",
+    "Scope",
+    "SpecError",
+    "SpecIssue",
+    "Task",
+    "TaskSpec",
+    "apply_overrides",
+    "json_schema",
+    "load_model",
+    "load_spec",
+    "read_yaml",
+    "spec_hash",
+    "task_hash",
+]

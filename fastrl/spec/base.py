@@ -11,9 +11,13 @@ from pydantic_core import InitErrorDetails, PydanticCustomError
 def _raise(errors: list[tuple[tuple, str, Any]]) -> None:
     """Raise one ValidationError carrying every (loc, message, input) with its own location."""
     if errors:
-        raise ValidationError.from_exception_data("TaskSpec", [
-            InitErrorDetails(type=PydanticCustomError("spec", msg), loc=loc, input=value)
-            for loc, msg, value in errors])
+        raise ValidationError.from_exception_data(
+            "TaskSpec",
+            [
+                InitErrorDetails(type=PydanticCustomError("spec", msg), loc=loc, input=value)
+                for loc, msg, value in errors
+            ],
+        )
 
 
 def _fail(dotted: str, msg: str) -> None:

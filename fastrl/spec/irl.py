@@ -29,42 +29,75 @@ class DiscriminatorSettings(Strict):
     batch_size: int = Field(256, ge=2)
     epochs: int = Field(2, ge=1, description="on-policy (PPO): passes over each rollout")
     steps: int = Field(4, ge=1, description="off-policy (SAC): gradient steps after each rollout")
-    every: int = Field(0, ge=0, description="off-policy: env steps (all envs) between discriminator fits, on the "
-                       "samples since the last fit; 0: after every rollout")
+    every: int = Field(
+        0,
+        ge=0,
+        description="off-policy: env steps (all envs) between discriminator fits, on the "
+        "samples since the last fit; 0: after every rollout",
+    )
     spectral_norm: bool = Field(False, description="spectrally normalise every layer")
-    gradient_penalty: float = Field(0.0, ge=0, description="weight of the WGAN-GP penalty (|grad logit| - 1)^2 at "
-                                    "points between policy and expert inputs; 0: none")
+    gradient_penalty: float = Field(
+        0.0,
+        ge=0,
+        description="weight of the WGAN-GP penalty (|grad logit| - 1)^2 at "
+        "points between policy and expert inputs; 0: none",
+    )
     current_rollout: bool = Field(True, description="off-policy: train only on the latest rollout's samples")
-    history: int = Field(0, ge=0, description="on-policy (PPO): keep a uniform sample of this many earlier policy "
-                         "transitions and add as many of them as the rollout has to each fit's policy side, so the "
-                         "learned reward keeps rating what earlier policies did low; 0: the rollout alone")
+    history: int = Field(
+        0,
+        ge=0,
+        description="on-policy (PPO): keep a uniform sample of this many earlier policy "
+        "transitions and add as many of them as the rollout has to each fit's policy side, so the "
+        "learned reward keeps rating what earlier policies did low; 0: the rollout alone",
+    )
     absorbing: bool = Field(True, description="terminated episodes continue in an absorbing state")
-    ignore: list[str] | None = Field(None, description="observation terms the discriminator does not see (the "
-                                     "policy still does). Default (null): GAIL ignores `elapsed`, AIRL sees all. "
-                                     "With the clock in its input, GAIL's non-negative reward is about 0 on every "
-                                     "state later than the expert's, however far the task has come")
-    reward_ignore: list[str] = Field([], description="shaped AIRL: terms the reward r_psi also leaves out, while "
-                                     "the potential h sees them (`[elapsed]`: the clock in the shaping only). "
-                                     "Off by default: without the clock r_psi no longer ranks ImageCentring trainees")
-    ranking: float = Field(0.0, ge=0, description="shaped AIRL on PPO: weight of a ranking loss on r_psi (D-REX): "
-                           "over snippets of the scripted expert whose actions are random at `ranking_noise` rates, "
-                           "less noise must sum higher; 0: none (GAIL and a SAC generator go without it)")
+    ignore: list[str] | None = Field(
+        None,
+        description="observation terms the discriminator does not see (the "
+        "policy still does). Default (null): GAIL ignores `elapsed`, AIRL sees all. "
+        "With the clock in its input, GAIL's non-negative reward is about 0 on every "
+        "state later than the expert's, however far the task has come",
+    )
+    reward_ignore: list[str] = Field(
+        [],
+        description="shaped AIRL: terms the reward r_psi also leaves out, while "
+        "the potential h sees them (`[elapsed]`: the clock in the shaping only). "
+        "Off by default: without the clock r_psi no longer ranks ImageCentring trainees",
+    )
+    ranking: float = Field(
+        0.0,
+        ge=0,
+        description="shaped AIRL on PPO: weight of a ranking loss on r_psi (D-REX): "
+        "over snippets of the scripted expert whose actions are random at `ranking_noise` rates, "
+        "less noise must sum higher; 0: none (GAIL and a SAC generator go without it)",
+    )
     ranking_noise: list[Annotated[float, Field(ge=0, le=1)]] = Field(
-        [0.0, 0.25, 0.5, 0.75, 1.0], min_length=2, description="random-action rates of the ranking rollouts")
+        [0.0, 0.25, 0.5, 0.75, 1.0], min_length=2, description="random-action rates of the ranking rollouts"
+    )
     ranking_episodes: int = Field(4, ge=1, description="ranking rollouts per noise rate")
     ranking_repeat: int = Field(1, ge=1, description="steps each random action of the ranking rollouts is held")
-    average_every: int = Field(50000, ge=0, description="shaped AIRL: copy r_psi and h every this many environment "
-                               "steps; the saved reward is the mean of the copies and the final networks (adversarial "
-                               "training converges in the average of its iterates); 0: the final networks alone")
+    average_every: int = Field(
+        50000,
+        ge=0,
+        description="shaped AIRL: copy r_psi and h every this many environment "
+        "steps; the saved reward is the mean of the copies and the final networks (adversarial "
+        "training converges in the average of its iterates); 0: the final networks alone",
+    )
     shaped: bool = Field(True, description="AIRL: f = r_psi(s) + gamma h(s') - h(s); false: the standard f(s, s')")
-    policy_term: bool | None = Field(None, description="AIRL: D's logit is f - log pi(a|s); false: f alone. Default "
-                                     "(null): on for PPO, off for SAC, whose squashed Gaussian gives the expert's "
-                                     "saturated actions a log pi of hundreds, which decides D on its own")
+    policy_term: bool | None = Field(
+        None,
+        description="AIRL: D's logit is f - log pi(a|s); false: f alone. Default "
+        "(null): on for PPO, off for SAC, whose squashed Gaussian gives the expert's "
+        "saturated actions a log pi of hundreds, which decides D on its own",
+    )
     entropy: bool = Field(True, description="AIRL on PPO: the generator's reward keeps -log pi (max-entropy form)")
-    scale_reward: bool | None = Field(None, description="on-policy (PPO): divide the generator's learned reward by "
-                                      "the running std of its discounted return (VecNormalize's reward scaling), so "
-                                      "the critic's targets stay in range as the discriminator sharpens. Default "
-                                      "(null): on for AIRL (3-5x fewer steps), off for GAIL (measured slower)")
+    scale_reward: bool | None = Field(
+        None,
+        description="on-policy (PPO): divide the generator's learned reward by "
+        "the running std of its discounted return (VecNormalize's reward scaling), so "
+        "the critic's targets stay in range as the discriminator sharpens. Default "
+        "(null): on for AIRL (3-5x fewer steps), off for GAIL (measured slower)",
+    )
 
 
 class BehaviourCloning(Strict):

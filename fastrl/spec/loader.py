@@ -284,9 +284,7 @@ def _message(err: dict, data: Any, path: tuple, model_cls: type[BaseModel]) -> s
     return re.sub(r"^(Value error|Assertion failed), ", "", err["msg"])
 
 
-def load_model(
-    path, model_cls: type[BaseModel], overrides: list[str] = (), context: dict | None = None
-) -> BaseModel:
+def load_model(path, model_cls: type[BaseModel], overrides: list[str] = (), context: dict | None = None) -> BaseModel:
     """Read a YAML spec, apply overrides, validate into model_cls; SpecError lists every problem."""
     data, lines = read_yaml(path)
     data, applied = _apply(data, overrides, "--set")

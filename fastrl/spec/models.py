@@ -26,7 +26,8 @@ class StartPose(Strict):
     roll_deg: float = 0.0
     cable_deg: float = 0.0
     noise: tuple[float, float, float, float, float] = Field(
-        (0.0, 0.0, 0.0, 0.0, 0.0), description="uniform +- noise per coordinate at reset (deg, deg, m, deg, deg)")
+        (0.0, 0.0, 0.0, 0.0, 0.0), description="uniform +- noise per coordinate at reset (deg, deg, m, deg, deg)"
+    )
 
 
 class Scope(Strict):
@@ -77,7 +78,8 @@ class Avatar(Strict):
     surface: Literal["plate", "dome"] = "plate"
     at: tuple[float, float]
     heading_deg: float = Field(
-        90.0, description="direction of the avatar's up, deg (plate: from +x; dome: from the zenith)")
+        90.0, description="direction of the avatar's up, deg (plate: from +x; dome: from the zenith)"
+    )
     cue: Cue | None = None
 
 
@@ -107,7 +109,8 @@ class Task(Strict):
     landmarks: list[Landmark] = []
     cue: Cue = Cue()
     jitter: tuple[NonNeg, NonNeg] = Field(
-        (0.0, 0.0), description="random avatar offset at reset: metres on the plate, degrees on the dome")
+        (0.0, 0.0), description="random avatar offset at reset: metres on the plate, degrees on the dome"
+    )
 
     @model_validator(mode="after")
     def _targets(self):
@@ -135,8 +138,10 @@ class Actions(Strict):
     """Action space and its scales."""
 
     mode: Literal["discrete", "continuous", "rates"] = Field(
-        "discrete", description="discrete: 11 portal increments; continuous: 7 tip accelerations and the cable "
-                                "rate (the FASTRL API); rates: 5 portal coordinate rates (first order)")
+        "discrete",
+        description="discrete: 11 portal increments; continuous: 7 tip accelerations and the cable "
+        "rate (the FASTRL API); rates: 5 portal coordinate rates (first order)",
+    )
     pivot_step_deg: Pos = 1.5
     insertion_step: Pos = 0.002
     roll_step_deg: Pos = 4.0
@@ -155,7 +160,8 @@ class Observation(Strict):
     """The paper's state, with options; `extra` adds registered terms by name."""
 
     state: Literal["full", "camera_position"] = Field(
-        "full", description="camera_position: the state is the camera position in R^3 only (the liver tour)")
+        "full", description="camera_position: the state is the camera position in R^3 only (the liver tour)"
+    )
     velocities: bool = True
     goal: bool = True
     egocentric: bool = False
@@ -164,8 +170,13 @@ class Observation(Strict):
 
     @model_validator(mode="after")
     def _known(self):
-        _raise([(("extra", i), f"unknown observation term '{name}' (known: {', '.join(OBSERVATION_TERMS)})", name)
-                for i, name in enumerate(self.extra) if name not in OBSERVATION_TERMS])
+        _raise(
+            [
+                (("extra", i), f"unknown observation term '{name}' (known: {', '.join(OBSERVATION_TERMS)})", name)
+                for i, name in enumerate(self.extra)
+                if name not in OBSERVATION_TERMS
+            ]
+        )
         return self
 
     def terms(self) -> list[str]:
@@ -232,10 +243,18 @@ class TaskSpec(Strict):
         if self.irl.algorithm == "bc" and self.train.algo != "PPO":
             _fail("irl.algorithm", "behavioural cloning trains the PPO policy: set train.algo: PPO")
         observed = self.observation.terms()
-        _raise([(("irl", "discriminator", field, i),
-                 f"'{name}' is not observed (observation terms: {', '.join(observed)})", name)
+        _raise(
+            [
+                (
+                    ("irl", "discriminator", field, i),
+                    f"'{name}' is not observed (observation terms: {', '.join(observed)})",
+                    name,
+                )
                 for field in ("ignore", "reward_ignore")
-                for i, name in enumerate(getattr(self.irl.discriminator, field) or []) if name not in observed])
+                for i, name in enumerate(getattr(self.irl.discriminator, field) or [])
+                if name not in observed
+            ]
+        )
         names = [p.name for p in self.scene.portals]
         if self.scope.portal not in names:
             _fail("scope.portal", f"no portal named '{self.scope.portal}' (portals: {', '.join(names)})")
@@ -245,8 +264,13 @@ class TaskSpec(Strict):
             errors.append((("task", "kind"), "liver_tour needs scene.kind: abdomen", self.task.kind))
         for i, lm in enumerate(self.task.landmarks):
             if lm.organ not in anatomy:
-                errors.append((("task", "landmarks", i, "organ"),
-                               f"no organ named '{lm.organ}' (anatomy: {', '.join(anatomy) or 'none'})", lm.organ))
+                errors.append(
+                    (
+                        ("task", "landmarks", i, "organ"),
+                        f"no organ named '{lm.organ}' (anatomy: {', '.join(anatomy) or 'none'})",
+                        lm.organ,
+                    )
+                )
         _raise(errors)
         for i, av in enumerate(self.task.avatars):
             problem = self.avatar_problem(av)
@@ -300,8 +324,10 @@ class TaskSpec(Strict):
         """Why an avatar is outside the dome or out of the scope's reach, or None."""
         r = self.scene.radius
         if av.surface == "plate" and math.hypot(*av.at) > r - 0.01:
-            return (f"target [{av.at[0]}, {av.at[1]}] is outside the dome: it is {math.hypot(*av.at):.3f} m from "
-                    f"the centre, the plate inside the shell ends at {r - 0.01:.3f} m")
+            return (
+                f"target [{av.at[0]}, {av.at[1]}] is outside the dome: it is {math.hypot(*av.at):.3f} m from "
+                f"the centre, the plate inside the shell ends at {r - 0.01:.3f} m"
+            )
         if av.surface == "dome" and not 5.0 <= av.at[1] <= 88.0:
             return f"target elevation {av.at[1]} deg is outside the dome's inner surface (5 to 88 deg)"
         pos, _, _ = geo.avatar_pose(r, av.surface, av.at, av.heading_deg)
@@ -321,12 +347,16 @@ class TaskSpec(Strict):
         off = math.degrees(math.acos(np.clip(d @ rot[:, 2] / dist, -1, 1)))
         reach = self.scope.pivot_limit_deg + self.scope.optics_deg
         if off > reach:
-            return (f"portal '{p.name}' cannot reach this target: it lies {off:.0f} deg off the portal axis, "
-                    f"the scope reaches {reach:.0f} deg (pivot limit + optics angle)")
+            return (
+                f"portal '{p.name}' cannot reach this target: it lies {off:.0f} deg off the portal axis, "
+                f"the scope reaches {reach:.0f} deg (pivot limit + optics angle)"
+            )
         far = self.scope.insertion[1] + 0.5 * (cue.distance[0] + cue.distance[1])
         if dist > far:
-            return (f"portal '{p.name}' cannot reach this target: it is {dist:.3f} m away, the scope holds it "
-                    f"at mid viewing distance only up to {far:.3f} m (insertion + viewing distance)")
+            return (
+                f"portal '{p.name}' cannot reach this target: it is {dist:.3f} m away, the scope holds it "
+                f"at mid viewing distance only up to {far:.3f} m (insertion + viewing distance)"
+            )
         if dist < cue.distance[0]:
             return f"target is {dist:.3f} m from portal '{p.name}', closer than the cue's minimum distance"
         return None

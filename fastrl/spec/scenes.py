@@ -17,8 +17,9 @@ class Portal(Strict):
     name: str
     azimuth: float = Field(description="degrees about +z from +x")
     elevation: float = Field(ge=0, le=85, description="degrees above the plate")
-    aim: tuple[float, float, float] = Field((0.0, 0.0, 0.0),
-                                            description="point the shaft aims at when pitch = yaw = 0 (m)")
+    aim: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0), description="point the shaft aims at when pitch = yaw = 0 (m)"
+    )
     radius: Pos = Field(0.012, description="radius of the hole (m)")
 
 
@@ -70,8 +71,7 @@ def _default_anatomy() -> dict[str, Organ]:
         "left_lobe": Organ(centre=(0.07, 0.05, 0.03), size=(0.04, 0.045, 0.024), rgba=(0.55, 0.19, 0.14, 1)),
         "falciform": Organ(centre=(0.055, 0.0, 0.09), size=(0.04, 0.002, 0.035), rgba=(0.9, 0.82, 0.6, 1)),
         "gallbladder": Organ(centre=(0.03, -0.065, 0.02), size=(0.025, 0.012, 0.012), rgba=(0.3, 0.5, 0.2, 1)),
-        "bowel": Organ(centre=(-0.045, 0.0, 0.021), size=(0.075, 0.1, 0.02), bumps=0.25,
-                       rgba=(0.85, 0.55, 0.5, 1)),
+        "bowel": Organ(centre=(-0.045, 0.0, 0.021), size=(0.075, 0.1, 0.02), bumps=0.25, rgba=(0.85, 0.55, 0.5, 1)),
     }
 
 
@@ -102,8 +102,11 @@ class AbdomenScene(Strict):
             low = verts[:, 2] < -1e-6
             if out.any() or low.any():
                 far = float(np.linalg.norm(verts, axis=1).max())
-                where = (f"reaches {far:.3f} m from the centre, past the wall at {self.radius:.3f} m" if out.any()
-                         else f"goes {-verts[:, 2].min():.3f} m below the posterior wall (z = 0)")
+                where = (
+                    f"reaches {far:.3f} m from the centre, past the wall at {self.radius:.3f} m"
+                    if out.any()
+                    else f"goes {-verts[:, 2].min():.3f} m below the posterior wall (z = 0)"
+                )
                 errors.append((("anatomy", name, field), f"{name} is outside the cavity: it {where}", organ.mesh))
         _raise(errors)
         return self

@@ -38,8 +38,12 @@ class SACParams(Params):
     learning_rate: float = Field(3e-4, gt=0)
     buffer_size: int = Field(300_000, ge=1000)
     learning_starts: int = Field(5_000, ge=0)
-    batch_size: int = Field(128, ge=2, description="SB3's default is 256; 128 with [128, 128] trains 2.8x faster "
-                            "to the same result (bench/sac_schedules.py)")
+    batch_size: int = Field(
+        128,
+        ge=2,
+        description="SB3's default is 256; 128 with [128, 128] trains 2.8x faster "
+        "to the same result (bench/sac_schedules.py)",
+    )
     tau: float = Field(0.005, gt=0, le=1)
     gamma: float = Field(0.99, gt=0, le=1)
     train_freq: int = Field(1, ge=1)
@@ -48,8 +52,11 @@ class SACParams(Params):
     target_entropy: float | Literal["auto"] = "auto"
     net_arch: list[int] = Field([128, 128], description="SB3's default is [256, 256]")
     activation: Literal["tanh", "relu"] = "relu"
-    lean_update: bool = Field(True, description="fastrl's leaner gradient step (same maths as SB3's, tested "
-                              "equal); false: stable-baselines3's own SAC.train")
+    lean_update: bool = Field(
+        True,
+        description="fastrl's leaner gradient step (same maths as SB3's, tested "
+        "equal); false: stable-baselines3's own SAC.train",
+    )
 
 
 class Normalize(BaseModel):
@@ -57,8 +64,11 @@ class Normalize(BaseModel):
 
     model_config = ConfigDict(frozen=True, extra="forbid")
     obs: bool = True
-    reward: bool | None = Field(None, description="normalise rewards by the running return scale; default (null): "
-                                "on for PPO, off for SAC, whose entropy temperature is tuned to the reward's scale")
+    reward: bool | None = Field(
+        None,
+        description="normalise rewards by the running return scale; default (null): "
+        "on for PPO, off for SAC, whose entropy temperature is tuned to the reward's scale",
+    )
 
 
 class Train(BaseModel):
@@ -93,6 +103,9 @@ class Evaluate(BaseModel):
     expert: bool = Field(True, description="also evaluate the scripted expert on the same seeds, for reference")
     periodic_every: int = Field(0, ge=0, description="timesteps between evaluations during training (0: none)")
     periodic_episodes: int = Field(10, ge=1, description="deterministic episodes per evaluation during training")
-    stop_at_subtasks: float | None = Field(None, gt=0, le=1,
-                                           description="stop training once an evaluation during training "
-                                                       "completes this share of subtasks")
+    stop_at_subtasks: float | None = Field(
+        None,
+        gt=0,
+        le=1,
+        description="stop training once an evaluation during training completes this share of subtasks",
+    )

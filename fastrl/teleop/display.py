@@ -11,8 +11,8 @@ from ..env.fast_env import GREEN
 from ..env.render import outside_camera
 from .keymap import key_table
 
-PATH_RGBA = np.array([1.0, 0.1, 0.9, 0.9], np.float32)   # suggested tip path (3D)
-AIM_RGBA = np.array([0.0, 0.85, 0.95, 0.9], np.float32)   # suggested view centre on the scene (3D)
+PATH_RGBA = np.array([1.0, 0.1, 0.9, 0.9], np.float32)  # suggested tip path (3D)
+AIM_RGBA = np.array([0.0, 0.85, 0.95, 0.9], np.float32)  # suggested view centre on the scene (3D)
 TIP_RGB, AIM_RGB = (255, 30, 230), (0, 215, 240)
 LIFT = np.array([0.0, 0.0, 0.0005])  # keep paths on the plate visible
 SMALL, BIG = mujoco.mjtFontScale.mjFONTSCALE_100, mujoco.mjtFontScale.mjFONTSCALE_150
@@ -26,8 +26,9 @@ class Display:
     def __init__(self, env, on_key, image_px: int = 384):
         self.env, self.image_px = env, image_px
         check_display()
-        self.handle = mujoco.viewer.launch_passive(env.model, env.data, key_callback=on_key,
-                                                   show_left_ui=False, show_right_ui=False)
+        self.handle = mujoco.viewer.launch_passive(
+            env.model, env.data, key_callback=on_key, show_left_ui=False, show_right_ui=False
+        )
         cam = outside_camera(env.task)
         with self.handle.lock():
             c = self.handle.cam
@@ -59,17 +60,22 @@ class Display:
             return False
         info, total = session.info, session.info["subtasks_total"]
         cue = "GREEN (hold)" if info["cue"]["green"] else "orange"
-        status = [("subject", session.writer.meta["subject"]),
-                  ("subtask", f"{min(info['subtask'] + 1, total)} of {total} ({info['subtask']} done)"),
-                  ("time", f"{info['time']:.1f} s of {session.spec.episode.time_limit:g} s"),
-                  ("avatar cue", f"{cue}  dwell {100 * info['cue']['dwell']:.0f}%"),
-                  (f"{session.assist.cue.kind} cue", f"{100 * session.cue_level:.0f}%")]
+        status = [
+            ("subject", session.writer.meta["subject"]),
+            ("subtask", f"{min(info['subtask'] + 1, total)} of {total} ({info['subtask']} done)"),
+            ("time", f"{info['time']:.1f} s of {session.spec.episode.time_limit:g} s"),
+            ("avatar cue", f"{cue}  dwell {100 * info['cue']['dwell']:.0f}%"),
+            (f"{session.assist.cue.kind} cue", f"{100 * session.cue_level:.0f}%"),
+        ]
         if session.suggestion is not None:
             sg = session.suggestion
-            status.append(("suggestion", f"{'reaches' if sg.reached else 'does not reach'} the next avatar "
-                                         f"({sg.ms:.0f} ms)"))
-        texts = [(SMALL, GRID.mjGRID_TOPLEFT, *self.keys),
-                 (BIG, GRID.mjGRID_TOPRIGHT, "\n".join(k for k, _ in status), "\n".join(v for _, v in status))]
+            status.append(
+                ("suggestion", f"{'reaches' if sg.reached else 'does not reach'} the next avatar ({sg.ms:.0f} ms)")
+            )
+        texts = [
+            (SMALL, GRID.mjGRID_TOPLEFT, *self.keys),
+            (BIG, GRID.mjGRID_TOPRIGHT, "\n".join(k for k, _ in status), "\n".join(v for _, v in status)),
+        ]
         if self.footer:
             texts.append((SMALL, GRID.mjGRID_BOTTOMRIGHT, self.footer, ""))
         self.handle.set_texts(texts)
@@ -87,22 +93,33 @@ class Display:
             d, cam = env.data, env.task.camera
             for points, colour, width in ((sg.tip[1:], TIP_RGB, 1), (sg.aim, AIM_RGB, 2)):
                 ok = np.isfinite(points).all(axis=1)
-                uv, front = project_points(points[ok], d.cam_xpos[cam], d.cam_xmat[cam],
-                                           float(env.model.cam_fovy[cam]), img.shape[1], img.shape[0])
+                uv, front = project_points(
+                    points[ok],
+                    d.cam_xpos[cam],
+                    d.cam_xmat[cam],
+                    float(env.model.cam_fovy[cam]),
+                    img.shape[1],
+                    img.shape[0],
+                )
                 img = draw_path(img, uv, front, colour, width)
         scale = max(1, px // img.shape[0])
         big = np.ascontiguousarray(np.repeat(np.repeat(img, scale, 0), scale, 1))
         h = big.shape[0]
-        avatar = (np.array(GREEN[:3]) * 255).astype(np.uint8) if session.info["cue"]["green"] else \
-            np.array([255, 140, 0], np.uint8)
+        avatar = (
+            (np.array(GREEN[:3]) * 255).astype(np.uint8)
+            if session.info["cue"]["green"]
+            else np.array([255, 140, 0], np.uint8)
+        )
         bar = np.zeros((h, 24, 3), np.uint8)
         bar[:] = avatar
         value = np.zeros((h, 24, 3), np.uint8)
         value[:] = cue_colour(session.cue_level)
         value[: int(round(h * (1 - session.cue_level)))] //= 4  # filled to the level, from the bottom
-        return [(mujoco.MjrRect(0, 0, big.shape[1], h), big),
-                (mujoco.MjrRect(big.shape[1] + 4, 0, 24, h), np.ascontiguousarray(bar)),
-                (mujoco.MjrRect(big.shape[1] + 32, 0, 24, h), np.ascontiguousarray(value))]
+        return [
+            (mujoco.MjrRect(0, 0, big.shape[1], h), big),
+            (mujoco.MjrRect(big.shape[1] + 4, 0, 24, h), np.ascontiguousarray(bar)),
+            (mujoco.MjrRect(big.shape[1] + 32, 0, 24, h), np.ascontiguousarray(value)),
+        ]
 
     def _draw_path(self, sg) -> None:
         """The suggested tip path as capsules in the 3D scene."""
@@ -113,12 +130,17 @@ class Display:
                 return
             for path, rgba, radius in ((sg.tip, PATH_RGBA, 0.0008), (sg.aim, AIM_RGBA, 0.0006)):
                 for a, b in zip(path[:-1], path[1:]):
-                    if scn.ngeom >= scn.maxgeom or not np.isfinite(a).all() or not np.isfinite(b).all() \
-                            or np.linalg.norm(b - a) < 1e-6:
+                    if (
+                        scn.ngeom >= scn.maxgeom
+                        or not np.isfinite(a).all()
+                        or not np.isfinite(b).all()
+                        or np.linalg.norm(b - a) < 1e-6
+                    ):
                         continue
                     g = scn.geoms[scn.ngeom]
-                    mujoco.mjv_initGeom(g, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3),
-                                        np.eye(3).ravel(), rgba)
+                    mujoco.mjv_initGeom(
+                        g, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3), np.eye(3).ravel(), rgba
+                    )
                     mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_CAPSULE, radius, a + LIFT, b + LIFT)
                     scn.ngeom += 1
 
@@ -134,8 +156,7 @@ class Display:
         self.footer = text
         end = time.monotonic() + (seconds if seconds >= 0 else float("inf"))
         while self.handle.is_running() and time.monotonic() < end:
-            self.handle.set_texts([(SMALL, GRID.mjGRID_TOPLEFT, *self.keys),
-                                   (SMALL, GRID.mjGRID_TOPRIGHT, text, "")])
+            self.handle.set_texts([(SMALL, GRID.mjGRID_TOPLEFT, *self.keys), (SMALL, GRID.mjGRID_TOPRIGHT, text, "")])
             self.handle.sync()
             time.sleep(0.1)
 

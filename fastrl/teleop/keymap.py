@@ -18,16 +18,21 @@ class Key:
     code: int
     name: str
     label: str
-    action: int | None = None   # discrete action index, or None for a command
+    action: int | None = None  # discrete action index, or None for a command
     command: str | None = None  # "suggest" or "quit"
 
 
 KEYS = (
-    Key(265, "Up", "pitch +", 1), Key(264, "Down", "pitch -", 2),
-    Key(262, "Right", "yaw +", 3), Key(263, "Left", "yaw -", 4),
-    Key(266, "Prior", "insert", 5), Key(267, "Next", "retract", 6),
-    Key(260, "Insert", "roll +", 7), Key(261, "Delete", "roll -", 8),
-    Key(268, "Home", "light cable +", 9), Key(269, "End", "light cable -", 10),
+    Key(265, "Up", "pitch +", 1),
+    Key(264, "Down", "pitch -", 2),
+    Key(262, "Right", "yaw +", 3),
+    Key(263, "Left", "yaw -", 4),
+    Key(266, "Prior", "insert", 5),
+    Key(267, "Next", "retract", 6),
+    Key(260, "Insert", "roll +", 7),
+    Key(261, "Delete", "roll -", 8),
+    Key(268, "Home", "light cable +", 9),
+    Key(269, "End", "light cable -", 10),
     Key(257, "Return", "suggest a path (with --assist)", command="suggest"),
     Key(256, "Escape", "finish and save", command="quit"),
 )
@@ -40,15 +45,21 @@ assert all(DISCRETE_MEANINGS[k.action] for k in KEYS if k.action is not None)
 def key_table() -> tuple[str, str]:
     """The key map as the viewer's two text columns (keys, what they do)."""
     keys = [KEY_NAMES.get(k.name, k.name) for k in KEYS]
-    labels = [k.label for k in KEYS] + ["drag: turn the view; double-click the scope,",
-                                        "then Ctrl + right-drag: pull it", "", "avatar cue | value cue",
-                                        "magenta: tip, cyan: view centre"]
+    labels = [k.label for k in KEYS] + [
+        "drag: turn the view; double-click the scope,",
+        "then Ctrl + right-drag: pull it",
+        "",
+        "avatar cue | value cue",
+        "magenta: tip, cyan: view centre",
+    ]
     return "\n".join(keys + ["mouse", "", "", "bars", "paths"]), "\n".join(labels)
 
 
 def key_markdown() -> str:
     """The key map as a markdown table (the README's)."""
     rows = [f"| {KEY_NAMES.get(k.name, k.name)} | {k.label} |" for k in KEYS]
-    rows += ["| mouse drag / scroll | turn / zoom the 3D view |",
-             "| double-click the scope, then Ctrl + right-drag | pull the scope (the servos follow it) |"]
+    rows += [
+        "| mouse drag / scroll | turn / zoom the 3D view |",
+        "| double-click the scope, then Ctrl + right-drag | pull the scope (the servos follow it) |",
+    ]
     return "\n".join(["| key | does |", "|---|---|", *rows])

@@ -45,9 +45,16 @@ def spec_of_trajectory(traj: Trajectory, spec_path: Path | None = None) -> TaskS
     return spec
 
 
-def attempt_recording(spec: TaskSpec, traj: Trajectory, out: Path, run: Path | None = None,
-                      every_s: float | None = None, feedback_md: str | None = None, assistance=None,
-                      image_every: int = 2) -> Path:
+def attempt_recording(
+    spec: TaskSpec,
+    traj: Trajectory,
+    out: Path,
+    run: Path | None = None,
+    every_s: float | None = None,
+    feedback_md: str | None = None,
+    assistance=None,
+    image_every: int = 2,
+) -> Path:
     """Replay an attempt into an .rrd with the value cue along the way and, with a run, suggestions every `every_s`."""
     from ..log.attempt import log_attempt
 
@@ -76,8 +83,9 @@ def attempt_recording(spec: TaskSpec, traj: Trajectory, out: Path, run: Path | N
             uvs = []
             for points in (sg.tip, sg.aim):
                 points = points[np.isfinite(points).all(axis=1)]
-                uv, front = project_points(points, u.data.cam_xpos[cam], u.data.cam_xmat[cam],
-                                           float(u.model.cam_fovy[cam]), u.width, u.height)
+                uv, front = project_points(
+                    points, u.data.cam_xpos[cam], u.data.cam_xmat[cam], float(u.model.cam_fovy[cam]), u.width, u.height
+                )
                 inside = front & (uv[:, 0] >= 0) & (uv[:, 0] <= u.width) & (uv[:, 1] >= 0) & (uv[:, 1] <= u.height)
                 uvs.append(uv[inside] if inside.sum() > 1 else None)
             suggestions.append((step, sg, *uvs))
@@ -85,8 +93,17 @@ def attempt_recording(spec: TaskSpec, traj: Trajectory, out: Path, run: Path | N
     ep, _ = replay_episode(env, traj, image_every, on_step)
     colours = np.array([cue_colour(x) for x in levels], np.uint8) if levels else None
     recording_id = f"attempt-{traj.meta.get('subject', 'x')}-{traj.meta.get('recorded_at', time.time())}"
-    return log_attempt(out, recording_id, env.task, ep, np.array(raws) if raws else None, colours, suggestions,
-                       feedback_md, cue.kind if cue is not None else "value")
+    return log_attempt(
+        out,
+        recording_id,
+        env.task,
+        ep,
+        np.array(raws) if raws else None,
+        colours,
+        suggestions,
+        feedback_md,
+        cue.kind if cue is not None else "value",
+    )
 
 
 def replay_in_viewer(spec: TaskSpec, traj: Trajectory, speed: float = 1.0, linger: float = 0.0) -> int:
@@ -110,8 +127,9 @@ def replay_in_viewer(spec: TaskSpec, traj: Trajectory, speed: float = 1.0, linge
             status = f"{traj.meta.get('subject', '?')}  t = {t:.1f} s"
             if info is not None:
                 status += f"  subtask {info['subtask']}  {'GREEN' if info['cue']['green'] else 'orange'}"
-            handle.set_texts([(mujoco.mjtFontScale.mjFONTSCALE_150, mujoco.mjtGridPos.mjGRID_TOPRIGHT, "replay",
-                               status)])
+            handle.set_texts(
+                [(mujoco.mjtFontScale.mjFONTSCALE_150, mujoco.mjtGridPos.mjGRID_TOPRIGHT, "replay", status)]
+            )
             handle.sync()
             shown += 1
         end = time.monotonic() + linger

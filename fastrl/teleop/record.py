@@ -43,9 +43,19 @@ def attempt_path(out_dir: Path, subject: str) -> Path:
     return Path(out_dir) / f"{safe}-{time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())}.npz"
 
 
-def record(spec: TaskSpec, subject: str, out_dir: Path, run: Path | None = None, seed: int = 0,
-           viewer: bool = True, linger: float = -1.0, max_seconds: float | None = None, feedback: bool = True,
-           suggest_every: float | None = None, say=print) -> dict:
+def record(
+    spec: TaskSpec,
+    subject: str,
+    out_dir: Path,
+    run: Path | None = None,
+    seed: int = 0,
+    viewer: bool = True,
+    linger: float = -1.0,
+    max_seconds: float | None = None,
+    feedback: bool = True,
+    suggest_every: float | None = None,
+    say=print,
+) -> dict:
     """Record one attempt; returns what was written and the feedback. Saved every second and on any exit."""
     assistance = load_assistance(run, spec, seed=seed)
     path = attempt_path(out_dir, subject)
@@ -84,14 +94,24 @@ def record(spec: TaskSpec, subject: str, out_dir: Path, run: Path | None = None,
         traj = Trajectory.load(saved)
         nets = load_networks_of(run) if run is not None else None
         scorer = Scorer(spec, nets)
-        fb = attempt_feedback(scorer, traj, Path(out_dir) / f"references-{traj.meta['task_hash']}.json",
-                              policy=nets.policy if nets is not None else None)
+        fb = attempt_feedback(
+            scorer,
+            traj,
+            Path(out_dir) / f"references-{traj.meta['task_hash']}.json",
+            policy=nets.policy if nets is not None else None,
+        )
         text = feedback_text(fb)
         session.writer.flush(feedback={k: v for k, v in fb.items() if k != "deviation_mm"})
         (saved.with_suffix(".feedback.json")).write_text(json.dumps(fb, indent=2, default=float))
         result["feedback"], result["feedback_text"] = fb, text
-        result["rrd"] = attempt_recording(spec, Trajectory.load(saved), saved.with_suffix(".rrd"), run,
-                                          feedback_md=markdown_feedback(fb), assistance=assistance)
+        result["rrd"] = attempt_recording(
+            spec,
+            Trajectory.load(saved),
+            saved.with_suffix(".rrd"),
+            run,
+            feedback_md=markdown_feedback(fb),
+            assistance=assistance,
+        )
         say(text)
         if display is not None:
             display.linger(text, linger)

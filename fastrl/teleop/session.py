@@ -31,12 +31,23 @@ class Assistance:
 class Session:
     """Steps the task at the control rate with the action of the key held last; never blocks on the viewer."""
 
-    def __init__(self, spec: TaskSpec, subject: str, path: Path, seed: int = 0, assist: Assistance | None = None,
-                 hold_s: float = 0.15, image_size: int = 128, spec_source: str | None = None,
-                 suggest_every: int | None = None):
+    def __init__(
+        self,
+        spec: TaskSpec,
+        subject: str,
+        path: Path,
+        seed: int = 0,
+        assist: Assistance | None = None,
+        hold_s: float = 0.15,
+        image_size: int = 128,
+        spec_source: str | None = None,
+        suggest_every: int | None = None,
+    ):
         if spec.actions.mode != "discrete":
-            raise ValueError("recording drives the scope with discrete increments: use a spec with actions.mode: "
-                             "discrete (or --set actions.mode=discrete)")
+            raise ValueError(
+                "recording drives the scope with discrete increments: use a spec with actions.mode: "
+                "discrete (or --set actions.mode=discrete)"
+            )
         self.spec, self.seed, self.hold, self.suggest_every = spec, seed, hold_s, suggest_every
         self.env = FastEnv(spec, width=image_size, height=image_size)
         self.assist = assist or Assistance()
@@ -49,9 +60,18 @@ class Session:
         self.suggestions: list[dict] = []
         self.cue_trace: list[list] = []
         self.infos: list[dict] = []
-        meta = {"spec": spec.name, "spec_hash": spec_hash(spec), "task_hash": task_hash(spec), "subject": subject,
-                "source": "human", "seed": seed, "skill": None, "control_hz": spec.episode.control_hz,
-                "recorded_at": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "complete": False}
+        meta = {
+            "spec": spec.name,
+            "spec_hash": spec_hash(spec),
+            "task_hash": task_hash(spec),
+            "subject": subject,
+            "source": "human",
+            "seed": seed,
+            "skill": None,
+            "control_hz": spec.episode.control_hz,
+            "recorded_at": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+            "complete": False,
+        }
         if spec_source:
             meta["spec_source"] = spec_source
         if self.assist.run:
@@ -163,10 +183,16 @@ class Session:
 
     def finish(self, **meta) -> Path | None:
         """Save the complete attempt with why it ended, its cue events and timing."""
-        return self.writer.flush(complete=True, end=self.stop, events=cue_events(self.infos),
-                                 realtime=self.timing(), suggestions=self.suggestions, mouse_ticks=self.pulled_ticks,
-                                 cue={"kind": self.assist.cue.kind, "lo": self.assist.cue.lo, "hi": self.assist.cue.hi},
-                                 **meta)
+        return self.writer.flush(
+            complete=True,
+            end=self.stop,
+            events=cue_events(self.infos),
+            realtime=self.timing(),
+            suggestions=self.suggestions,
+            mouse_ticks=self.pulled_ticks,
+            cue={"kind": self.assist.cue.kind, "lo": self.assist.cue.lo, "hi": self.assist.cue.hi},
+            **meta,
+        )
 
     def timing(self) -> dict:
         """Real-time figures of the loop (ms)."""
@@ -174,7 +200,14 @@ class Session:
         dt = 1000.0 / self.spec.episode.control_hz
         if not len(p):
             return {"control_period_ms": dt}
-        return {"control_period_ms": dt, "ticks": len(p) + 1, "period_ms_mean": float(p.mean()),
-                "period_ms_p95": float(np.percentile(p, 95)), "period_ms_max": float(p.max()),
-                "work_ms_mean": float(w.mean()), "work_ms_p95": float(np.percentile(w, 95)),
-                "late_ticks": int((p > 1.5 * dt).sum()), "display_frames_skipped": self.skipped_frames}
+        return {
+            "control_period_ms": dt,
+            "ticks": len(p) + 1,
+            "period_ms_mean": float(p.mean()),
+            "period_ms_p95": float(np.percentile(p, 95)),
+            "period_ms_max": float(p.max()),
+            "work_ms_mean": float(w.mean()),
+            "work_ms_p95": float(np.percentile(w, 95)),
+            "late_ticks": int((p > 1.5 * dt).sum()),
+            "display_frames_skipped": self.skipped_frames,
+        }

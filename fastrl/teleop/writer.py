@@ -33,7 +33,7 @@ class AttemptWriter:
         if len(self.time) < 2:
             return None
         n = len(self.time)
-        actions = np.array(self.actions[-(n - 1):], np.int64) if len(self.actions) >= n - 1 else None
+        actions = np.array(self.actions[-(n - 1) :], np.int64) if len(self.actions) >= n - 1 else None
         return Trajectory(np.array(self.time), np.array(self.portal), {**self.meta, **meta}, actions)
 
     def flush(self, **meta) -> Path | None:
