@@ -26,18 +26,30 @@ def log_episode(
     image_size: tuple[int, int] | None = None,
     world: str = "world/eval/ep_00",
     metrics: str = "metrics/eval/ep_00",
+    timesteps: int | None = None,
 ) -> None:
-    """Send the whole episode with send_columns on the `step` and `sim_time` timelines."""
+    """Send the whole episode with send_columns on the `step` and `sim_time` timelines.
+
+    With `timesteps` (the training steps of the policy) the scope, camera, images and cue are also
+    placed at that point of the `timesteps` timeline, so the training curves' view shows the
+    episode's final state; its scalars stay on `step` (one x for all of them would be a smear).
+    """
     steps = np.arange(len(ep.time))
     index = [
         rr.TimeColumn("step", sequence=steps),
         rr.TimeColumn("sim_time", duration=np.asarray(ep.time, float)),
     ]
-    _log_scope(rec, world, ep, index, task.spec.scope.diameter)
-    _log_camera(rec, world, ep, index, fov_deg, image_size)
+    scene = index + _trained_at(timesteps, len(steps))
+    _log_scope(rec, world, ep, scene, task.spec.scope.diameter)
+    _log_camera(rec, world, ep, scene, fov_deg, image_size, timesteps)
     _log_path(rec, world, ep)
-    _log_cue(rec, world, ep, index, task)
+    _log_cue(rec, world, ep, scene, task)
     _log_scalars(rec, metrics, ep, index)
+
+
+def _trained_at(timesteps: int | None, n: int) -> list:
+    """A `timesteps` index column holding the policy's training steps on every row (none if unknown)."""
+    return [] if timesteps is None else [rr.TimeColumn("timesteps", sequence=np.full(n, int(timesteps)))]
 
 
 def _log_scope(rec, world: str, ep: EpisodeRecord, index: list, diameter: float) -> None:
@@ -58,7 +70,7 @@ def _log_scope(rec, world: str, ep: EpisodeRecord, index: list, diameter: float)
     )
 
 
-def _log_camera(rec, world: str, ep: EpisodeRecord, index: list, fov_deg: float, image_size) -> None:
+def _log_camera(rec, world: str, ep: EpisodeRecord, index: list, fov_deg: float, image_size, timesteps=None) -> None:
     """Camera pose per step (MuJoCo wxyz -> xyzw), a static pinhole looking along -Z, the images."""
     # The pinhole takes the images' own size; `image_size` (w, h) serves only when there are none.
     quat = np.asarray(ep.tip_quat, float)[:, [1, 2, 3, 0]]
@@ -91,6 +103,7 @@ def _log_camera(rec, world: str, ep: EpisodeRecord, index: list, fov_deg: float,
     img_index = [
         rr.TimeColumn("step", sequence=at),
         rr.TimeColumn("sim_time", duration=np.asarray(ep.time)[at]),
+        *_trained_at(timesteps, len(at)),
     ]
     rec.send_columns(
         image,

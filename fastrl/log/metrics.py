@@ -21,6 +21,11 @@ class TrainingCurves:
 
     def __init__(self, rec: rr.RecordingStream, root: str = "metrics/train"):
         self.rec, self.root, self.styled = rec, root, set()
+        self.last: int | None = None  # the latest timesteps with a row
+
+    def _seen(self, timesteps) -> None:
+        """Remember the latest timesteps logged."""
+        self.last = int(timesteps) if self.last is None else max(self.last, int(timesteps))
 
     def _style(self, name: str) -> str:
         """Entity path of a metric; logs its static SeriesLines the first time."""
@@ -33,6 +38,7 @@ class TrainingCurves:
     def row(self, timesteps: int, metrics: dict[str, float]) -> None:
         """One value per metric at `timesteps`, through the batcher; None/NaN skipped."""
         self.rec.set_time("timesteps", sequence=int(timesteps))
+        self._seen(timesteps)
         try:
             for name, value in metrics.items():
                 if _finite(value):
@@ -43,6 +49,8 @@ class TrainingCurves:
     def columns(self, timesteps: np.ndarray, metrics: dict[str, np.ndarray]) -> None:
         """Many rows per metric at once; NaN entries are dropped per metric."""
         ts = np.asarray(timesteps, np.int64)
+        if len(ts):
+            self._seen(ts.max())
         for name, values in metrics.items():
             v = np.asarray(values, float)  # None -> NaN
             if len(v) != len(ts):

@@ -71,6 +71,7 @@ class RunRecorder:
             image_size,
             world=f"world/eval/{name}",
             metrics=f"metrics/eval/{name}",
+            timesteps=self.curves.last,
         )
 
     def log_training(self, timesteps: int, metrics: dict[str, float]) -> None:
@@ -89,9 +90,10 @@ class RunRecorder:
             static=True,
         )
 
-    def send_blueprint(self, n_episodes: int, irl: bool = False) -> None:
+    def send_blueprint(self, n_episodes: int, irl: bool = False, curves: bool = True) -> None:
         """Send the layout the viewer opens with (scene + episode 0, image, curves, summary)."""
-        self.rec.send_blueprint(run_blueprint(n_episodes, eye=self.eye, irl=irl), make_active=True, make_default=True)
+        blueprint = run_blueprint(n_episodes, eye=self.eye, irl=irl, curves=curves)
+        self.rec.send_blueprint(blueprint, make_active=True, make_default=True)
 
     def close(self) -> None:
         """Flush everything and close the file (idempotent)."""

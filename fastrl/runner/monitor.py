@@ -54,6 +54,7 @@ class TrainingMonitor(BaseCallback):
         self.window: list[dict] = []
         self.episodes = 0
         self.next_log = self.next_ckpt = self.next_tick = 0
+        self.logged = 0  # timesteps of the latest point
         self.started = time.perf_counter()
         self.start_steps = 0
         self.progress = Progress(
@@ -71,7 +72,7 @@ class TrainingMonitor(BaseCallback):
     def _on_training_start(self) -> None:
         n = self.training_env.num_envs
         self.ret, self.feats = np.zeros(n), np.zeros((n, len(self.names)))
-        self.start_steps = self.num_timesteps
+        self.start_steps = self.logged = self.num_timesteps
         self.started = time.perf_counter()
         self.next_log = self.num_timesteps + self.log_every
         self.next_ckpt = self.num_timesteps + self.checkpoint_every
@@ -120,6 +121,8 @@ class TrainingMonitor(BaseCallback):
         return True
 
     def _on_training_end(self) -> None:
+        if self.num_timesteps > self.logged:  # the curves end where training ended
+            self.log_point()
         self.progress.stop()
 
     def rate(self) -> float:
@@ -147,6 +150,7 @@ class TrainingMonitor(BaseCallback):
             if key.startswith("train/") and isinstance(value, (int, float)) and math.isfinite(value):
                 m[f"loss/{key[6:]}"] = float(value)
         self.window = []
+        self.logged = int(self.num_timesteps)
         with (self.run / "metrics.jsonl").open("a") as f:
             f.write(json.dumps({"timesteps": int(self.num_timesteps), **m}) + "\n")
         if self.recorder is not None:

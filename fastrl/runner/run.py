@@ -82,7 +82,8 @@ def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resuming: bool
         path.rename(run / f"recording.part{k}.rrd")
     recorder = RunRecorder(path, recording_id=run.name, run_name=f"{spec.name} {run.name}")
     recorder.log_scene(task)
-    recorder.send_blueprint(min(spec.evaluate.record_episodes, spec.evaluate.episodes), spec.irl.enabled)
+    n = min(spec.evaluate.record_episodes, spec.evaluate.episodes)
+    recorder.send_blueprint(n, spec.irl.enabled, curves=spec.irl.algorithm != "bc")  # BC logs no curves
     if resuming:
         history = (
             [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines() if line.strip()]
