@@ -56,7 +56,7 @@ def print_levels(table: list[dict], name: str) -> None:
     """Mean ± sd of heuristic return, subtasks and duration per skill level."""
     from rich.table import Table
 
-    t = Table(title=f"{name}: synthetic trainees by skill level (figures recomputed by replay)")
+    t = Table(title=f"{escape(name)}: synthetic trainees by skill level (figures recomputed by replay)")
     for col in ("level", "n", "heuristic return", "subtasks", "duration (s)"):
         t.add_column(col, justify="right")
     for e in table:

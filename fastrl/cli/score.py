@@ -83,7 +83,9 @@ def print_report(report: dict) -> None:
         table.add_column(k, justify="right")
     for g in report["groups"]:
         table.add_row(
-            str(g["subject"]), str(g["n"]), *["-" if g[k] is None else f"{g[k]:.3g} ± {g[k + '_sd']:.2g}" for k in keys]
+            escape(str(g["subject"])),
+            str(g["n"]),
+            *["-" if g[k] is None else f"{g[k]:.3g} ± {g[k + '_sd']:.2g}" for k in keys],
         )
     out.print(table)
     out.print(report["normalisation"], style="dim")

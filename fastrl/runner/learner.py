@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 from rich.console import Console
+from rich.markup import escape
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecEnv
@@ -91,7 +92,7 @@ def demonstrations(spec: TaskSpec, run: Path, console: Console, progress: bool) 
         else:
             usable.append(traj)
     for message in errors:
-        console.print(f"[yellow]skipped[/yellow] {message}", markup=False, highlight=False)
+        console.print(f"[yellow]skipped[/yellow] {escape(message)}", highlight=False)
     if not usable:
         raise FileNotFoundError(f"no usable demonstrations (with actions) in {folder}")
     return usable
