@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
+import typer.core
 from rich.console import Console
 from rich.markup import escape
 
@@ -15,6 +16,18 @@ from ..spec import SpecError, SpecIssue, json_schema, load_spec
 
 if TYPE_CHECKING:
     from ..model import CompiledTask
+
+_value_type = typer.core.TyperOption.display_type_rich
+
+
+def _flag_has_no_value(self, ctx):
+    """Type column of --help: none for flags (--json, --progress/--no-progress, --help take no value)."""
+    return None if self.is_flag else _value_type(self, ctx)
+
+
+# typer 0.29 prints `<bool>` beside every flag, as if it took a value; this covers the commands
+# of every module and typer's own --help.
+typer.core.TyperOption.display_type_rich = _flag_has_no_value
 
 app = typer.Typer(
     name="fastrl",
@@ -271,6 +284,11 @@ def train_and_report(
         exit_with(e)
     results = json.loads((run_dir / "eval.json").read_text())
     print_eval(results)
+    from ..runner.advice import learning_advice
+
+    advice = learning_advice(run_dir, spec)
+    if advice:
+        err.print(f"warning: {advice}", markup=False, style="yellow")
     out.print(f"run saved in {escape(str(run_dir))}; view it with: fastrl view {escape(str(run_dir))}")
 
 
@@ -357,23 +375,42 @@ def runs_(
     if not rows:
         out.print(f"no runs under {escape(str(root))}")
         return
-    table = Table(title=f"runs under {root}")
-    for col in ("run", "spec", "algo", "seed", "status", "timesteps", "wall", "success", "subtasks"):
-        table.add_column(col, overflow="fold")
+    table = Table(title=f"runs under {escape(str(root))}", box=None, pad_edge=False, collapse_padding=True)
+    # The run's name holds its spec, algorithm and seed (spec/<time>-<algo>-s<seed>): kept whole, on one line.
+    longest = max(len(Path(r["run"]).relative_to(root).as_posix()) for r in rows)
+    table.add_column("run", no_wrap=True, min_width=min(longest, 44))
+    table.add_column("status", no_wrap=True, overflow="ellipsis", max_width=10)
+    for col in ("steps", "wall", "success", "subtasks"):
+        table.add_column(col, justify="right", no_wrap=True)
     for r in rows:
         pct = lambda v: "-" if v is None else f"{v:.0%}"  # noqa: E731
         table.add_row(
-            str(Path(r["run"]).relative_to(root)),
-            r["spec"] or "?",
-            r["algo"] or "?",
-            str(r["seed"]),
-            r["status"],
-            str(r["timesteps"] or "-"),
-            "-" if r["wall_s"] is None else f"{r['wall_s']:.0f}s",
+            escape(Path(r["run"]).relative_to(root).as_posix()),
+            escape(r["status"]),
+            _count(r["timesteps"]),
+            _duration(r["wall_s"]),
             pct(r["success"]),
             pct(r["subtasks"]),
         )
     out.print(table)
+
+
+def _count(n: int | None) -> str:
+    """A step count in a few characters: 16384 -> 16k, 1500000 -> 1.5M."""
+    if not n:
+        return "-"
+    if n >= 1_000_000:
+        return f"{n / 1e6:.3g}M"
+    return f"{n / 1e3:.3g}k" if n >= 1000 else str(n)
+
+
+def _duration(seconds: float | None) -> str:
+    """Wall time in a few characters: 42s, 12m, 3.5h."""
+    if seconds is None:
+        return "-"
+    if seconds < 120:
+        return f"{seconds:.0f}s"
+    return f"{seconds / 60:.0f}m" if seconds < 7200 else f"{seconds / 3600:.1f}h"
 
 
 # commands in their own modules register themselves on `app`
