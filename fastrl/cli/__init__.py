@@ -17,7 +17,7 @@ from ..spec import SpecError, SpecIssue, json_schema, load_spec
 if TYPE_CHECKING:
     from ..model import CompiledTask
 
-_value_type = typer.core.TyperOption.display_type_rich
+_value_type = getattr(typer.core.TyperOption, "display_type_rich", None)
 
 
 def _flag_has_no_value(self, ctx):
@@ -27,7 +27,8 @@ def _flag_has_no_value(self, ctx):
 
 # typer 0.29 prints `<bool>` beside every flag, as if it took a value; this covers the commands
 # of every module and typer's own --help.
-typer.core.TyperOption.display_type_rich = _flag_has_no_value
+if _value_type is not None:  # a typer without it prints no type column to fix
+    typer.core.TyperOption.display_type_rich = _flag_has_no_value
 
 app = typer.Typer(
     name="fastrl",
