@@ -75,8 +75,9 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=2)
     args = ap.parse_args()
 
-    from fastrl.data.replay import expert_trajectories, expert_transitions
+    from fastrl.data.replay import expert_trajectories
     from fastrl.env import FastEnv
+    from fastrl.irl.demonstrations import expert_transitions
 
     cache = {}
 

@@ -8,8 +8,9 @@ import torch
 import fastrl
 from fastrl.agents.expert import ScriptedExpert
 from fastrl.agents.sb3 import build_model, make_vec_env
-from fastrl.data.replay import expert_trajectories, expert_transitions
+from fastrl.data.replay import expert_trajectories
 from fastrl.irl import AdversarialCallback, Discriminator
+from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.discriminator import absorbing_states, augment
 from fastrl.irl.fitting import DiscriminatorFit, input_gradient_norm, make_batch
 from fastrl.irl.ranking import RankedRollouts, noisy_expert_rollout

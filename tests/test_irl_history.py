@@ -5,8 +5,9 @@ import pytest
 
 import fastrl
 from fastrl.agents.sb3 import build_model, make_vec_env
-from fastrl.data.replay import expert_trajectories, expert_transitions
+from fastrl.data.replay import expert_trajectories
 from fastrl.irl import AdversarialCallback, Discriminator, Transitions
+from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.history import PolicyHistory
 from fastrl.spec import load_spec
 

@@ -6,8 +6,9 @@ import torch
 
 import fastrl
 from fastrl.agents.sb3 import build_model, make_vec_env
-from fastrl.data.replay import expert_trajectories, expert_transitions
+from fastrl.data.replay import expert_trajectories
 from fastrl.irl import Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
+from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.discriminator import augment
 from fastrl.spec import load_spec
 

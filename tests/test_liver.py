@@ -16,9 +16,9 @@ import fastrl
 from fastrl.agents.expert import run_expert_episode
 from fastrl.assess.tour import economy, safety, tour_metrics
 from fastrl.cli import app
-from fastrl.model.anatomy import landmark_pose, organ_vertices
 from fastrl.model.kinematics import Kinematics, solve_view, view_residuals
 from fastrl.spec import SpecError, load_spec, read_yaml
+from fastrl.spec.anatomy import landmark_pose, organ_vertices
 
 from .conftest import spec_file
 

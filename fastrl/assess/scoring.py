@@ -6,12 +6,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..data.replay import replay
 from ..data.trajectory import Trajectory, TrajectoryError
 from ..env.fast_env import FastEnv
 from ..model.kinematics import Kinematics
 from ..spec import task_hash
+from ..spec.anatomy import anatomy_vertices
 from ..spec.models import TaskSpec
 from .kinematic import log_dimensionless_jerk, path_length
 from .tour import tour_metrics
@@ -82,10 +84,6 @@ class Scorer:
         self.learned = networks is not None and networks.kind is not None
         self.anatomy = None
         if spec.scene.kind == "abdomen":
-            from scipy.spatial import cKDTree
-
-            from ..model.anatomy import anatomy_vertices
-
             self.anatomy = cKDTree(anatomy_vertices(spec.scene))
 
     def tip_path(self, portal: np.ndarray) -> np.ndarray:

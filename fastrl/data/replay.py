@@ -7,7 +7,6 @@ from collections.abc import Callable
 import numpy as np
 
 from ..agents.expert import ScriptedExpert
-from ..irl.fitting import Transitions
 from ..spec import spec_hash, task_hash
 from .episode import EpisodeRecord
 from .trajectory import Trajectory
@@ -88,19 +87,6 @@ def demonstration_pairs(env, trajectories: list[Trajectory]) -> tuple[np.ndarray
     if not pairs:
         raise ValueError("no trajectory with actions to learn from")
     return np.concatenate([p[0] for p in pairs]), np.concatenate([p[1] for p in pairs])
-
-
-def expert_transitions(env, trajectories: list[Trajectory]) -> Transitions:
-    """Transitions (s, s', terminal, a) of demonstrations for a discriminator, recomputed by replay."""
-    obs, nxt, term, acts = [], [], [], []
-    for o, infos, actions in replay_demonstrations(env, trajectories):
-        obs.append(o[:-1])
-        nxt.append(o[1:])
-        t = np.zeros(len(actions), np.float32)
-        t[-1] = 1.0 if infos[-1]["success"] else 0.0
-        term.append(t)
-        acts.append(actions)
-    return Transitions(np.concatenate(obs), np.concatenate(nxt), np.concatenate(term), np.concatenate(acts))
 
 
 def cue_events(infos: list[dict]) -> list[list]:

@@ -15,6 +15,7 @@ import numpy as np
 import torch
 
 from ..agents.expert import ScriptedExpert
+from ..data.replay import rollout_trajectory
 from .discriminator import Discriminator, absorbing_states, augment
 
 
@@ -23,8 +24,6 @@ def noisy_expert_rollout(
 ) -> tuple[np.ndarray, bool]:
     """Raw observations (T+1, d) of the expert whose action is replaced, with probability `noise`, by a random one
     held for `repeat` steps; and whether the episode terminated (the task done) rather than ran out of time."""
-    from ..data.replay import rollout_trajectory  # data imports irl: import here, not at module level
-
     rng = np.random.default_rng(seed)
     env.action_space.seed(seed)
     held, left = None, 0

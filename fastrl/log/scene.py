@@ -6,11 +6,11 @@ import numpy as np
 import rerun as rr
 
 from ..model.abdomen import FLOOR_RGBA, TROCAR_RGBA, WALL_RGBA
-from ..model.anatomy import organ_mesh
 from ..model.compiler import CompiledTask
 from ..model.dome import PLATE_RGBA, PORTAL_RGBA, SHELL_RGBA
 from ..model.targets import LINE_RGBA
 from ..spec import geometry as geo
+from ..spec.anatomy import organ_mesh
 from .shapes import disk, hemisphere, rgba, ring
 
 AVATAR_RGBA = (0.8, 0.62, 0.42)  # muted: the current avatar is drawn per episode in cue colours

@@ -5,8 +5,8 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from ..spec.anatomy import organ_mesh
 from ..spec.models import AbdomenScene
-from .anatomy import organ_mesh
 from .dome import WORLD_CONAFFINITY, WORLD_CONTYPE, add_shell
 
 WALL_RGBA = (0.86, 0.6, 0.55, 1.0)

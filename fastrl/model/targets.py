@@ -8,8 +8,8 @@ import mujoco
 import numpy as np
 
 from ..spec import geometry as geo
+from ..spec.anatomy import landmark_pose
 from ..spec.models import Avatar, Cue, TaskSpec
-from .anatomy import landmark_pose
 
 LINE_RGBA = (0.1, 0.25, 0.7, 1.0)
 AVATAR_GROUP = 1

@@ -14,6 +14,8 @@ from ..assess.figures import deviations, group_of, plot_deviation, plot_distribu
 from ..assess.references import expert_paths, reference_scores
 from ..assess.report import build_report, csv_text, score_files, trajectory_files
 from ..assess.scoring import Scorer, normalise
+from ..irl.networks import load_networks
+from ..log.assessment import log_assessment
 from ..spec import load_spec
 
 
@@ -33,8 +35,6 @@ def load_scorer(run: Path | None, spec_path: Path | None) -> tuple[Scorer, str |
             raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
         networks = None
         if (run / "networks" / "policy.json").exists():
-            from ..irl.networks import load_networks
-
             networks = load_networks(run / "networks")
         return Scorer(load_spec(run / "spec.yaml"), networks), run.name
     if spec_path is None:
@@ -109,8 +109,6 @@ def _pictures(
     scorer: Scorer, scored, report: dict, paths: dict[str, Path], recording_id: str, result: Assessment
 ) -> None:
     """PNG figures and the Rerun recording of the assessment."""
-    from ..log.assessment import log_assessment
-
     by = report["grouped_by"]
     devs = deviations(scored, expert_paths(scorer, [s.meta.get("seed", 0) for s in scored]))
     result.files["paths"] = plot_paths(scored, by, paths["paths"], scorer.spec.scene.radius)

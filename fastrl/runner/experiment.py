@@ -16,6 +16,8 @@ from scipy.stats import spearmanr
 from ..assess.scoring import Scorer, TrajectoryScores
 from ..data.cohort import make_cohort
 from ..data.trajectory import Trajectory
+from ..irl.networks import load_networks
+from ..log.experiment import log_experiment, plot_correlations
 from ..model.compiler import compile_task
 from ..spec import load_spec
 from ..spec.models import TaskSpec
@@ -57,15 +59,11 @@ def run_experiment(run: Path, console: Console, progress: bool) -> Path:
         sub = train_irl(run, algo, console, progress)
         timings[f"irl_{algo}"] = time.perf_counter() - t0
         t0 = time.perf_counter()
-        from ..irl.networks import load_networks
-
         scorer = Scorer(spec, load_networks(sub / "networks"))
         learned[algo] = _score_all(scorer, cohort, f"{algo} scores", console, progress)
         timings[f"score_{algo}"] = time.perf_counter() - t0
     result = experiment_result(spec, scored, learned, best, timings)
     (run / "experiment.json").write_text(json.dumps(result, indent=2))
-    from ..log.experiment import log_experiment, plot_correlations
-
     plot_correlations(result, run / "table3.png")
     log_experiment(
         run / "recording.rrd", run.name, compile_task(spec), scored, learned, result, figure=run / "table3.png"

@@ -14,11 +14,12 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from ..agents.bc import behaviour_clone
 from ..agents.sb3 import build_model, make_vec_env
-from ..data.replay import demonstration_pairs, expert_transitions
+from ..data.replay import demonstration_pairs
 from ..data.trajectory import Trajectory, load_trajectories
 from ..env.fast_env import FastEnv
 from ..irl import AdversarialCallback, Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
 from ..irl.averaging import RewardAveraging
+from ..irl.demonstrations import expert_transitions
 from ..irl.ranking import RankedRollouts
 from ..spec.models import TaskSpec
 from .demos import write_demos

@@ -10,6 +10,7 @@ from pydantic import Field, field_validator, model_validator
 
 from ..terms import OBSERVATION_TERMS, REWARD_FEATURES
 from . import geometry as geo
+from .anatomy import landmark_pose
 from .base import NonNeg, Pos, Strict, _fail, _raise
 from .experiment import Experiment
 from .irl import IRL
@@ -276,8 +277,6 @@ class TaskSpec(Strict):
             problem = self.avatar_problem(av)
             if problem:
                 errors.append((("task", "avatars", i, "at"), problem, list(av.at)))
-        from ..model.anatomy import landmark_pose
-
         for i, lm in enumerate(self.task.landmarks):
             pos, _, _ = landmark_pose(anatomy[lm.organ], self.portal_point())
             problem = self.reach_problem(pos, lm.cue or self.task.cue)

@@ -8,6 +8,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import AfterValidator, Field, field_validator, model_validator
 
+from .anatomy import MeshError, organ_vertices
 from .base import NonNeg, Pos, Strict, _raise
 
 
@@ -88,8 +89,6 @@ class AbdomenScene(Strict):
 
     @model_validator(mode="after")
     def _inside(self):
-        from ..model.anatomy import MeshError, organ_vertices
-
         errors = []
         for name, organ in self.anatomy.items():
             field = "mesh" if organ.mesh else "size"

@@ -7,10 +7,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..agents.expert import ScriptedExpert
 from ..assist import Suggester, ValueCue, cue_colour, project_points
 from ..data.replay import replay_episode
 from ..data.trajectory import Trajectory, TrajectoryError
 from ..env.fast_env import FastEnv
+from ..irl.networks import load_networks
+from ..log.attempt import log_attempt
 from ..spec import load_spec, spec_hash
 from ..spec.models import TaskSpec
 
@@ -24,8 +27,6 @@ def spec_of_run(run: Path) -> TaskSpec:
 
 def load_networks_of(run: Path):
     """A run's exported networks (policy and value; reward after inverse RL)."""
-    from ..irl.networks import load_networks
-
     if not (Path(run) / "networks" / "policy.json").exists():
         raise FileNotFoundError(f"{run} has no exported networks (networks/policy.json)")
     return load_networks(Path(run) / "networks")
@@ -56,8 +57,6 @@ def attempt_recording(
     image_every: int = 2,
 ) -> Path:
     """Replay an attempt into an .rrd with the value cue along the way and, with a run, suggestions every `every_s`."""
-    from ..log.attempt import log_attempt
-
     env = FastEnv(spec, width=192, height=192)
     suggester = cue = None
     if assistance is not None:
@@ -65,8 +64,6 @@ def attempt_recording(
     elif run is not None:
         nets = load_networks_of(run)
         suggester, cue = Suggester(spec, nets.policy), ValueCue(nets)
-        from ..agents.expert import ScriptedExpert
-
         expert = ScriptedExpert(FastEnv(spec))
         cue.calibrate(expert.env, {"expert": lambda _o: expert.act()})
     every = max(1, round((every_s or 1.0) * spec.episode.control_hz))

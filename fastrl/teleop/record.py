@@ -7,10 +7,12 @@ import signal
 import time
 from pathlib import Path
 
+from ..agents.expert import ScriptedExpert
 from ..assess.scoring import Scorer
 from ..assist import Suggester, ValueCue
 from ..assist.feedback import attempt_feedback, feedback_text
 from ..data.trajectory import Trajectory
+from ..env.fast_env import FastEnv
 from ..spec.models import TaskSpec
 from .offline import attempt_recording, load_networks_of, spec_of_run
 from .session import Assistance, Session
@@ -18,9 +20,6 @@ from .session import Assistance, Session
 
 def load_assistance(run: Path | None, spec: TaskSpec, horizon_s: float = 3.0, seed: int = 0) -> Assistance:
     """The run's policy as a suggester and its value as the cue (heuristic potential cue without a run)."""
-    from ..agents.expert import ScriptedExpert
-    from ..env.fast_env import FastEnv
-
     env = FastEnv(spec)
     expert = ScriptedExpert(env)
     if run is None:

@@ -1,4 +1,8 @@
-"""Anatomy meshes: parametric ellipsoids made in code, or OBJ/STL files read by MuJoCo; landmark poses on them."""
+"""Anatomy geometry of a spec: parametric ellipsoids made in code, or OBJ/STL files read by MuJoCo; landmark poses.
+
+The one MuJoCo import of the spec layer: validating a spec (organ inside the cavity, landmark in reach) needs the
+vertices of its mesh files as MuJoCo reads them (pyproject.toml names this exception in the import contracts).
+"""
 
 from __future__ import annotations
 
