@@ -52,7 +52,12 @@ def run_with_history(normalised: bool):
         venv.obs_rms.mean[:], venv.obs_rms.var[:], venv.training = 3.0, 0.25, False
     model = build_model(spec, venv)
     cb = AdversarialCallback(
-        Discriminator(venv.observation_space.shape[0], "airl", 0.99), expert, epochs=1, batch_size=64, history=1000
+        Discriminator(venv.observation_space.shape[0], "airl", 0.99),
+        expert,
+        epochs=1,
+        batch_size=64,
+        history=1000,
+        scale_reward=True,
     )
     fitted = []
     fit_epochs = cb.fit.epochs

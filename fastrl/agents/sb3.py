@@ -44,8 +44,7 @@ def make_vec_env(spec: TaskSpec, n_envs: int, seed: int) -> VecEnv:
     venv = FreshInfoVecEnv([lambda: FastEnv(spec) for _ in range(n_envs)])
     venv.seed(seed)
     norm = spec.train.normalize
-    by_default = spec.train.algo == "PPO"  # SAC: a moving reward scale fights its entropy temperature
-    norm_reward = (by_default if norm.reward is None else norm.reward) and not spec.irl.enabled
+    norm_reward = norm.reward and not spec.irl.enabled
     if norm.obs or norm_reward:
         venv = VecNormalize(venv, norm_obs=norm.obs, norm_reward=norm_reward, gamma=spec.train.params().gamma)
     return venv
@@ -55,8 +54,9 @@ def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) 
     """The spec's algorithm with its hyperparameters on the vectorised env (`extra`: more SB3 arguments)."""
     params = {**spec.train.params().model_dump(), **{k: v for k, v in extra.items() if v is not None}}
     net, act = params.pop("net_arch"), ACTIVATIONS[params.pop("activation")]
-    arch = {"pi": net, "vf": net} if spec.train.algo == "PPO" else {"pi": net, "qf": net}
-    algo = LeanSAC if params.pop("lean_update", False) else ALGOS[spec.train.algo]
+    kind = spec.train.kind
+    arch = {"pi": net, kind.critic: net}
+    algo = LeanSAC if params.pop("lean_update", False) else ALGOS[kind.name]
     torch.set_num_threads(1)
     return algo(
         "MlpPolicy",

@@ -19,9 +19,9 @@ class AdversarialCallback(BaseCallback):
 
     With `history` > 0, each fit's policy side is the rollout plus as many transitions drawn from a reservoir of
     that many earlier ones (raw observations, normalised and scored under the current policy when drawn).
-    With `scale_reward` (default: AIRL yes, GAIL no), the generator's learned reward is divided by the running spread
-    of its discounted return. With `ranked` rollouts, each discriminator step adds `ranking_weight` times their
-    ranking loss on shaped AIRL's r_psi."""
+    With `scale_reward` (the spec's default: AIRL yes, GAIL no), the generator's learned reward is divided by the
+    running spread of its discounted return. With `ranked` rollouts, each discriminator step adds `ranking_weight`
+    times their ranking loss on shaped AIRL's r_psi."""
 
     def __init__(
         self,
@@ -33,7 +33,7 @@ class AdversarialCallback(BaseCallback):
         seed: int = 0,
         entropy: bool = True,
         history: int = 0,
-        scale_reward: bool | None = None,
+        scale_reward: bool = False,
         gradient_penalty: float = 0.0,
         ranked: RankedRollouts | None = None,
         ranking_weight: float = 0.0,
@@ -42,7 +42,7 @@ class AdversarialCallback(BaseCallback):
         self.disc, self.expert, self.n_epochs, self.entropy = disc, expert, epochs, entropy
         self.fit = DiscriminatorFit(disc, lr, batch_size, seed, gradient_penalty)
         self.history = PolicyHistory(history, seed) if history else None
-        self.scale_reward = disc.kind == "airl" if scale_reward is None else scale_reward
+        self.scale_reward = scale_reward
         self.scale: ReturnScale | None = None
         self.stats: dict[str, float] = {}
         self.ranked, self.ranking_weight = ranked, ranking_weight

@@ -121,7 +121,7 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
         if irl.algorithm == "bc":
             learner.demos = demonstrations(spec, run, console, progress)
         return learner
-    off_policy = spec.train.algo == "SAC"
+    off_policy = spec.train.kind.off_policy
     model = build_model(spec, venv, replay_buffer_class=RelabelingReplayBuffer if off_policy else None)
     demos = demonstrations(spec, run, console, progress)
     d = irl.discriminator
@@ -134,7 +134,7 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
         d.spectral_norm,
         d.absorbing,
         d.shaped,
-        not off_policy if d.policy_term is None else d.policy_term,
+        d.policy_term,
         spec.discriminator_inputs(),
         spec.reward_inputs(),
     )

@@ -4,6 +4,7 @@ import hashlib
 import json
 from pathlib import Path
 
+from .defaults import canonical_dump
 from .loader import SpecError, SpecIssue, apply_overrides, load_model, read_yaml
 from .models import Avatar, Cue, DomeScene, Line, Portal, Scope, Task, TaskSpec
 
@@ -14,8 +15,8 @@ def load_spec(path, overrides=()) -> TaskSpec:
 
 
 def spec_hash(spec: TaskSpec) -> str:
-    """SHA-256 of the resolved spec's canonical JSON (first 16 hex digits)."""
-    text = json.dumps(spec.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
+    """SHA-256 of the spec's canonical JSON, algorithm-dependent defaults as null (first 16 hex digits)."""
+    text = json.dumps(canonical_dump(spec), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 

@@ -54,7 +54,8 @@ class DiscriminatorSettings(Strict):
     ignore: list[str] | None = Field(
         None,
         description="observation terms the discriminator does not see (the "
-        "policy still does). Default (null): GAIL ignores `elapsed`, AIRL sees all. "
+        "policy still does). null: resolved when the spec is loaded, GAIL ignores `elapsed` (if observed), "
+        "AIRL sees all. "
         "With the clock in its input, GAIL's non-negative reward is about 0 on every "
         "state later than the expert's, however far the task has come",
     )
@@ -86,8 +87,8 @@ class DiscriminatorSettings(Strict):
     shaped: bool = Field(True, description="AIRL: f = r_psi(s) + gamma h(s') - h(s); false: the standard f(s, s')")
     policy_term: bool | None = Field(
         None,
-        description="AIRL: D's logit is f - log pi(a|s); false: f alone. Default "
-        "(null): on for PPO, off for SAC, whose squashed Gaussian gives the expert's "
+        description="AIRL: D's logit is f - log pi(a|s); false: f alone. null: "
+        "resolved when the spec is loaded, on for PPO, off for SAC, whose squashed Gaussian gives the expert's "
         "saturated actions a log pi of hundreds, which decides D on its own",
     )
     entropy: bool = Field(True, description="AIRL on PPO: the generator's reward keeps -log pi (max-entropy form)")
@@ -95,8 +96,8 @@ class DiscriminatorSettings(Strict):
         None,
         description="on-policy (PPO): divide the generator's learned reward by "
         "the running std of its discounted return (VecNormalize's reward scaling), so "
-        "the critic's targets stay in range as the discriminator sharpens. Default "
-        "(null): on for AIRL (3-5x fewer steps), off for GAIL (measured slower)",
+        "the critic's targets stay in range as the discriminator sharpens. null: "
+        "resolved when the spec is loaded, on for AIRL (3-5x fewer steps), off for GAIL (measured slower)",
     )
 
 

@@ -12,6 +12,7 @@ from ..terms import OBSERVATION_TERMS, REWARD_FEATURES
 from . import geometry as geo
 from .anatomy import landmark_pose
 from .base import NonNeg, Pos, Strict, _fail, _raise
+from .defaults import resolve_defaults
 from .experiment import Experiment
 from .irl import IRL
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
@@ -239,9 +240,10 @@ class TaskSpec(Strict):
 
     @model_validator(mode="after")
     def _reachable(self):
-        if self.train.algo == "SAC" and self.actions.mode == "discrete":
-            _fail("train.algo", "SAC needs continuous actions: set actions.mode: continuous (or rates)")
-        if self.irl.algorithm == "bc" and self.train.algo != "PPO":
+        kind = self.train.kind
+        if not kind.discrete and self.actions.mode == "discrete":
+            _fail("train.algo", f"{kind.name} needs continuous actions: set actions.mode: continuous (or rates)")
+        if self.irl.algorithm == "bc" and kind.off_policy:
             _fail("irl.algorithm", "behavioural cloning trains the PPO policy: set train.algo: PPO")
         observed = self.observation.terms()
         _raise(
@@ -290,12 +292,15 @@ class TaskSpec(Strict):
         _raise(errors)
         return self
 
+    @model_validator(mode="after")
+    def _resolve_defaults(self):
+        """Fill the defaults that depend on the algorithms (null in the spec), so a run's spec.yaml records them."""
+        resolve_defaults(self)
+        return self
+
     def _discriminator_ignores(self) -> list[str]:
-        """The terms the discriminator leaves out (default: GAIL the clock, AIRL none)."""
-        ignore = self.irl.discriminator.ignore
-        if ignore is None:
-            return ["elapsed"] if self.irl.algorithm == "gail" else []
-        return ignore
+        """The terms the discriminator leaves out."""
+        return self.irl.discriminator.ignore or []
 
     def discriminator_inputs(self) -> list[int] | None:
         """Observation columns the discriminator sees (every frame of a stack); None: all of them."""

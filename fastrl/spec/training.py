@@ -6,6 +6,8 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from .learners import LEARNERS, LearnerKind
+
 
 class Params(BaseModel):
     """Base for hyperparameter sets: unknown names are errors."""
@@ -66,8 +68,9 @@ class Normalize(BaseModel):
     obs: bool = True
     reward: bool | None = Field(
         None,
-        description="normalise rewards by the running return scale; default (null): "
-        "on for PPO, off for SAC, whose entropy temperature is tuned to the reward's scale",
+        description="normalise rewards by the running return scale (never when learning from demonstrations); "
+        "null: resolved when the spec is loaded, on for PPO, off for SAC, whose entropy temperature is tuned "
+        "to the reward's scale",
     )
 
 
@@ -86,9 +89,14 @@ class Train(BaseModel):
     log_every: int = Field(10_000, ge=1, description="timesteps between training-curve points")
     keep_checkpoints: int = Field(3, ge=1, description="how many of the newest checkpoints to keep")
 
+    @property
+    def kind(self) -> LearnerKind:
+        """What the chosen algorithm is: on- or off-policy, its defaults, its SB3 names."""
+        return LEARNERS[self.algo]
+
     def params(self) -> Params:
         """The hyperparameters of the chosen algorithm."""
-        return self.ppo if self.algo == "PPO" else self.sac
+        return getattr(self, self.kind.name.lower())
 
 
 class Evaluate(BaseModel):
