@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..data.loop import episode_steps
 from ..env.fast_env import FastEnv
 
 RED, YELLOW, GREEN = np.array([220, 40, 30]), np.array([240, 200, 30]), np.array([40, 200, 60])
@@ -43,11 +44,7 @@ class ValueCue:
         """Set lo/hi to the 5th/95th percentiles of the cue over one episode of each policy (obs -> action)."""
         seen = []
         for act in policies.values():
-            env.reset(seed=seed)
-            done = False
-            while not done:
-                seen.append(self.raw(env))
-                _, _, term, trunc, _ = env.step(act(env.observation()))
-                done = term or trunc
+            steps = episode_steps(env, seed, policy=lambda _obs, act=act: act(env.observation()))
+            seen += [self.raw(env) for _ in steps][:-1]  # the states an action was taken in
         self.lo, self.hi = (float(v) for v in np.percentile(seen, [5, 95]))
         return {"kind": self.kind, "lo": self.lo, "hi": self.hi, "policies": list(policies), "seed": seed}

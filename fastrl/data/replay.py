@@ -9,6 +9,7 @@ import numpy as np
 from ..agents.expert import ScriptedExpert
 from ..spec import spec_hash, task_hash
 from .episode import EpisodeRecord
+from .loop import EpisodeRecorder, episode_steps
 from .trajectory import Trajectory
 
 
@@ -17,19 +18,13 @@ def rollout_trajectory(
 ) -> tuple[Trajectory, np.ndarray]:
     """Run one episode and keep its portal coordinates and actions; also return the observations."""
     u = env.unwrapped
-    obs, _ = env.reset(seed=seed)
-    if on_reset is not None:
-        on_reset()
-    times, coords, actions, observations = [0.0], [u.portal_coordinates()], [], [obs]
-    done = False
-    while not done:
-        action = policy(obs)
-        obs, _, term, trunc, info = env.step(action)
-        actions.append(np.asarray(action))
-        times.append(info["time"])
+    times, coords, actions, observations = [], [], [], []
+    for step, (obs, _, info, action) in enumerate(episode_steps(env, seed, policy=policy, on_reset=on_reset)):
+        if step:
+            actions.append(np.asarray(action))
+        times.append(info["time"] if step else 0.0)
         coords.append(u.portal_coordinates())
         observations.append(obs)
-        done = term or trunc
     meta = {
         "spec": u.task_spec.name,
         "spec_hash": spec_hash(u.task_spec),
@@ -54,20 +49,13 @@ def replay(env, traj: Trajectory, on_sample: Callable | None = None) -> tuple[np
 
     `on_sample(env)`, if given, is called after each sample is placed (to read more of the state).
     """
-    u = env.unwrapped
-    obs, info = u.reset(seed=int(traj.meta.get("seed", 0)), options={"portal": traj.portal[0]})
-    if on_sample is not None:
-        on_sample(u)
-    observations, infos, rewards = [obs], [info], [0.0]
-    for q in traj.portal[1:]:
-        obs, reward, term, trunc, info = u.replay_step(q)
+    observations, infos, rewards = [], [], []
+    for obs, reward, info, _ in episode_steps(env, int(traj.meta.get("seed", 0)), portal=traj.portal):
         if on_sample is not None:
-            on_sample(u)
+            on_sample(env.unwrapped)
         observations.append(obs)
         infos.append(info)
         rewards.append(reward)
-        if term:
-            break
     return np.array(observations), infos, np.array(rewards)
 
 
@@ -107,60 +95,12 @@ def replay_episode(
     env, traj: Trajectory, image_every: int = 0, on_step: Callable | None = None
 ) -> tuple[EpisodeRecord, np.ndarray]:
     """A trajectory replayed as an EpisodeRecord (and its observations); `on_step(step, env)` sees each state."""
-    u = env.unwrapped
-    obs, info = u.reset(seed=int(traj.meta.get("seed", 0)), options={"portal": traj.portal[0]})
-    shaft = u.model.body("scope_shaft").id
-    length = u.task_spec.scope.shaft_length
-    rows, images, observations = [], {}, []
-
-    def snapshot(reward: float, info: dict, obs) -> None:
-        s = u.state
-        axis = u.data.xmat[shaft].reshape(3, 3)[:, 2]
-        rows.append(
-            (
-                s.time,
-                s.portal,
-                s.tip_pos,
-                s.tip_quat,
-                u.data.xpos[shaft] - length * axis,
-                reward,
-                list(info["features"].values()),
-                info["subtask"],
-                info["cue"]["green"],
-                info["contacts"],
-            )
-        )
+    seed = int(traj.meta.get("seed", 0))
+    rec = EpisodeRecorder(env, image_every=image_every, image=lambda u: u.render())
+    observations = []
+    for obs, reward, info, _ in episode_steps(env, seed, portal=traj.portal):
         observations.append(obs)
-        step = len(rows) - 1
-        if image_every and step % image_every == 0:
-            images[step] = u.render()
+        step = rec.snapshot(float(reward), info)
         if on_step is not None:
-            on_step(step, u)
-
-    snapshot(0.0, info, obs)
-    for q in traj.portal[1:]:
-        obs, reward, term, _, info = u.replay_step(q)
-        snapshot(float(reward), info, obs)
-        if term:
-            break
-    cols = list(zip(*rows))
-    names = u.feature_names
-    feats = np.array(cols[6], float).reshape(len(rows), len(names))
-    ep = EpisodeRecord(
-        seed=int(traj.meta.get("seed", 0)),
-        time=np.array(cols[0]),
-        portal=np.array(cols[1]),
-        tip_pos=np.array(cols[2]),
-        tip_quat=np.array(cols[3]),
-        shaft_end=np.array(cols[4]),
-        reward=np.array(cols[5]),
-        features={n: feats[:, i] for i, n in enumerate(names)},
-        subtask=np.array(cols[7]),
-        green=np.array(cols[8], bool),
-        contacts=np.array(cols[9]),
-        actions=traj.actions,
-        images=images,
-        subtasks_total=info["subtasks_total"],
-        success=bool(info["success"]),
-    )
-    return ep, np.array(observations)
+            on_step(step, env.unwrapped)
+    return rec.record(seed, traj.actions, info), np.array(observations)

@@ -7,6 +7,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..data.episode import EpisodeRecord
+from ..data.loop import EpisodeRecorder, episode_steps
 
 Policy = Callable[[np.ndarray], object]
 
@@ -15,62 +16,13 @@ def record_episode(
     env, policy: Policy, seed: int, image_every: int = 0, on_reset: Callable | None = None
 ) -> EpisodeRecord:
     """Run one episode from `seed`; keep poses, rewards, features, cues and every k-th endoscope image."""
-    u = env.unwrapped
-    obs, info = env.reset(seed=seed)
-    if on_reset is not None:
-        on_reset()
-    shaft = u.model.body("scope_shaft").id
-    length = u.task_spec.scope.shaft_length
-    rows, actions, images = [], [], {}
-
-    def snapshot(reward: float, info: dict) -> None:
-        s = u.state
-        axis = u.data.xmat[shaft].reshape(3, 3)[:, 2]
-        rows.append(
-            (
-                s.time,
-                s.portal,
-                s.tip_pos,
-                s.tip_quat,
-                u.data.xpos[shaft] - length * axis,
-                reward,
-                list(info["features"].values()),
-                info["subtask"],
-                info["cue"]["green"],
-                info["contacts"],
-            )
-        )
-        if image_every and (len(rows) - 1) % image_every == 0:
-            images[len(rows) - 1] = u.render_views(outside=False)["endoscope"]
-
-    snapshot(0.0, info)
-    done = False
-    while not done:
-        action = policy(obs)
-        obs, reward, term, trunc, info = env.step(action)
-        actions.append(np.asarray(action))
-        snapshot(float(reward), info)
-        done = term or trunc
-    cols = list(zip(*rows))
-    names = u.feature_names
-    feats = np.array(cols[6], float).reshape(len(rows), len(names))
-    return EpisodeRecord(
-        seed=seed,
-        time=np.array(cols[0]),
-        portal=np.array(cols[1]),
-        tip_pos=np.array(cols[2]),
-        tip_quat=np.array(cols[3]),
-        shaft_end=np.array(cols[4]),
-        reward=np.array(cols[5]),
-        features={n: feats[:, i] for i, n in enumerate(names)},
-        subtask=np.array(cols[7]),
-        green=np.array(cols[8], bool),
-        contacts=np.array(cols[9]),
-        actions=np.array(actions),
-        images=images,
-        subtasks_total=info["subtasks_total"],
-        success=bool(info["success"]),
-    )
+    rec = EpisodeRecorder(env, image_every=image_every, image=lambda u: u.render_views(outside=False)["endoscope"])
+    actions = []
+    for step, (_, reward, info, action) in enumerate(episode_steps(env, seed, policy=policy, on_reset=on_reset)):
+        if step:
+            actions.append(np.asarray(action))
+        rec.snapshot(float(reward), info)
+    return rec.record(seed, np.array(actions), info)
 
 
 def summarize(episodes: list[EpisodeRecord]) -> dict:

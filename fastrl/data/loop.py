@@ -1,0 +1,105 @@
+"""The one episode loop (a policy stepping the env, or recorded coordinates replayed in it) and its recorder.
+
+Evaluation, demonstrations, replay and assessment all run their episodes through `episode_steps`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+
+import numpy as np
+
+from .episode import EpisodeRecord
+
+
+def episode_steps(
+    env,
+    seed: int,
+    *,
+    policy: Callable | None = None,
+    portal: np.ndarray | None = None,
+    on_reset: Callable | None = None,
+) -> Iterator[tuple[np.ndarray, float, dict, object]]:
+    """Yield (observation, reward, info, action) at the reset state (reward 0, action None) and after each step.
+
+    With `policy` (observation -> action) the env steps until the episode terminates or is truncated; else the
+    recorded `portal` coordinates are replayed (the first is the reset pose) until the task terminates or they end.
+    `on_reset()` is called right after the reset."""
+    u = env.unwrapped
+    if policy is not None:
+        obs, info = env.reset(seed=seed)
+    else:
+        obs, info = u.reset(seed=seed, options={"portal": portal[0]})
+    if on_reset is not None:
+        on_reset()
+    yield obs, 0.0, info, None
+    if policy is not None:
+        done = False
+        while not done:
+            action = policy(obs)
+            obs, reward, term, trunc, info = env.step(action)
+            yield obs, reward, info, action
+            done = term or trunc
+        return
+    for q in portal[1:]:
+        obs, reward, term, _, info = u.replay_step(q)
+        yield obs, reward, info, None
+        if term:
+            break
+
+
+class EpisodeRecorder:
+    """Poses, rewards, features, cues and every k-th image of an episode's states, made into an EpisodeRecord."""
+
+    def __init__(self, env, *, image_every: int = 0, image: Callable | None = None):
+        self.u = env.unwrapped
+        self.shaft = self.u.model.body("scope_shaft").id
+        self.length = self.u.task_spec.scope.shaft_length
+        self.image_every, self.image = image_every, image
+        self.rows: list[tuple] = []
+        self.images: dict[int, np.ndarray] = {}
+
+    def snapshot(self, reward: float, info: dict) -> int:
+        """Keep the env's current state; return its step index."""
+        u, s = self.u, self.u.state
+        axis = u.data.xmat[self.shaft].reshape(3, 3)[:, 2]
+        self.rows.append(
+            (
+                s.time,
+                s.portal,
+                s.tip_pos,
+                s.tip_quat,
+                u.data.xpos[self.shaft] - self.length * axis,
+                reward,
+                list(info["features"].values()),
+                info["subtask"],
+                info["cue"]["green"],
+                info["contacts"],
+            )
+        )
+        step = len(self.rows) - 1
+        if self.image_every and step % self.image_every == 0:
+            self.images[step] = self.image(u)
+        return step
+
+    def record(self, seed: int, actions: np.ndarray | None, info: dict) -> EpisodeRecord:
+        """The kept states as an EpisodeRecord (`info`: the last step's)."""
+        cols = list(zip(*self.rows))
+        names = self.u.feature_names
+        feats = np.array(cols[6], float).reshape(len(self.rows), len(names))
+        return EpisodeRecord(
+            seed=seed,
+            time=np.array(cols[0]),
+            portal=np.array(cols[1]),
+            tip_pos=np.array(cols[2]),
+            tip_quat=np.array(cols[3]),
+            shaft_end=np.array(cols[4]),
+            reward=np.array(cols[5]),
+            features={n: feats[:, i] for i, n in enumerate(names)},
+            subtask=np.array(cols[7]),
+            green=np.array(cols[8], bool),
+            contacts=np.array(cols[9]),
+            actions=actions,
+            images=self.images,
+            subtasks_total=info["subtasks_total"],
+            success=bool(info["success"]),
+        )
