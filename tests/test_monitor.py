@@ -36,9 +36,9 @@ def test_evaluations_during_training_are_logged_and_can_stop_it(tmp_path):
     monitor = TrainingMonitor(
         tmp_path,
         list(spec.reward.features),
-        4096,
-        10_000,
-        192,
+        total=4096,
+        log_every=10_000,
+        checkpoint_every=192,
         progress=False,
         stats=lambda: {"irl/disc_accuracy": 0.75},
         parts={"disc": part},

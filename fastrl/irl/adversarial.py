@@ -27,6 +27,7 @@ class AdversarialCallback(BaseCallback):
         self,
         disc: Discriminator,
         expert: Transitions,
+        *,
         epochs: int = 2,
         batch_size: int = 256,
         lr: float = 3e-4,
@@ -40,7 +41,7 @@ class AdversarialCallback(BaseCallback):
     ):
         super().__init__()
         self.disc, self.expert, self.n_epochs, self.entropy = disc, expert, epochs, entropy
-        self.fit = DiscriminatorFit(disc, lr, batch_size, seed, gradient_penalty)
+        self.fit = DiscriminatorFit(disc, lr=lr, batch_size=batch_size, seed=seed, gradient_penalty=gradient_penalty)
         self.history = PolicyHistory(history, seed) if history else None
         self.scale_reward = scale_reward
         self.scale: ReturnScale | None = None

@@ -48,6 +48,7 @@ class Discriminator(nn.Module):
         obs_dim: int,
         kind: Literal["gail", "airl"],
         gamma: float,
+        *,
         hidden=(64, 64),
         spectral: bool = False,
         absorbing: bool = True,

@@ -91,7 +91,13 @@ class DiscriminatorFit:
     between the paired rows (the WGAN-GP penalty, as in Discriminator-Actor-Critic)."""
 
     def __init__(
-        self, disc: Discriminator, lr: float = 3e-4, batch_size: int = 256, seed: int = 0, gradient_penalty: float = 0.0
+        self,
+        disc: Discriminator,
+        *,
+        lr: float = 3e-4,
+        batch_size: int = 256,
+        seed: int = 0,
+        gradient_penalty: float = 0.0,
     ):
         self.disc, self.batch_size, self.gradient_penalty = disc, batch_size, gradient_penalty
         self.ranking: Callable[[], torch.Tensor] | None = None  # a weighted ranking loss added to each step

@@ -47,6 +47,7 @@ class OffPolicyAdversarialCallback(BaseCallback):
         self,
         disc: Discriminator,
         expert: Transitions,
+        *,
         current_rollout: bool = True,
         steps: int = 4,
         batch_size: int = 256,
@@ -58,7 +59,7 @@ class OffPolicyAdversarialCallback(BaseCallback):
         super().__init__()
         self.disc, self.expert, self.current_rollout, self.n_steps = disc, expert, current_rollout, steps
         self.every, self.last_fit = every, 0
-        self.fit = DiscriminatorFit(disc, lr, batch_size, seed, gradient_penalty)
+        self.fit = DiscriminatorFit(disc, lr=lr, batch_size=batch_size, seed=seed, gradient_penalty=gradient_penalty)
         self.stats: dict[str, float] = {}
         self.last_policy_rows: tuple[np.ndarray, np.ndarray] | None = None
 

@@ -44,7 +44,9 @@ def noisy_expert_rollout(
 class RankedRollouts:
     """Noisy-expert rollouts padded to one length, their noise rates, and the ranking loss of r_psi on them."""
 
-    def __init__(self, env, noise: list[float], episodes: int, seed: int = 50000, snippet: int = 50, repeat: int = 1):
+    def __init__(
+        self, env, noise: list[float], episodes: int, *, seed: int = 50000, snippet: int = 50, repeat: int = 1
+    ):
         expert = ScriptedExpert(env)
         runs = [
             noisy_expert_rollout(env, expert, eps, seed + 1000 * i + k, repeat)

@@ -30,6 +30,7 @@ class TrainingMonitor(BaseCallback):
         self,
         run: Path,
         feature_names: list[str],
+        *,
         total: int,
         log_every: int,
         checkpoint_every: int,

@@ -112,17 +112,17 @@ def _train_and_evaluate(
         monitor = TrainingMonitor(
             run,
             list(spec.reward.features),
-            spec.train.timesteps,
-            spec.train.log_every,
-            spec.train.checkpoint_every,
-            recorder,
-            progress,
-            spec.train.keep_checkpoints,
-            learner.stats,
-            learner.parts,
-            periodic_evaluator(spec, model, venv),
-            ev.periodic_every,
-            ev.stop_at_subtasks,
+            total=spec.train.timesteps,
+            log_every=spec.train.log_every,
+            checkpoint_every=spec.train.checkpoint_every,
+            recorder=recorder,
+            progress=progress,
+            keep_checkpoints=spec.train.keep_checkpoints,
+            stats=learner.stats,
+            parts=learner.parts,
+            evaluator=periodic_evaluator(spec, model, venv),
+            eval_every=ev.periodic_every,
+            stop_at=ev.stop_at_subtasks,
         )
         monitor.episodes = before.get("episodes", 0)
         seconds = before.get("train_seconds", 0.0)

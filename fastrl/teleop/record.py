@@ -59,7 +59,7 @@ def record(
     assistance = load_assistance(run, spec, seed=seed)
     path = attempt_path(out_dir, subject)
     every = round(suggest_every * spec.episode.control_hz) if suggest_every else None
-    session = Session(spec, subject, path, seed, assistance, suggest_every=every)
+    session = Session(spec, subject, path, seed=seed, assist=assistance, suggest_every=every)
     session.writer.meta["task_spec"] = spec.model_dump(mode="json")
     display = None
     previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}

@@ -36,6 +36,7 @@ class Session:
         spec: TaskSpec,
         subject: str,
         path: Path,
+        *,
         seed: int = 0,
         assist: Assistance | None = None,
         hold_s: float = 0.15,
