@@ -4,7 +4,7 @@ import pytest
 import yaml
 
 from fastrl.runner.rundir import write_spec
-from fastrl.spec import TaskSpec, load_spec, spec_hash
+from fastrl.spec import SpecError, TaskSpec, load_spec, spec_hash
 
 from .conftest import spec_file
 
@@ -61,3 +61,15 @@ def test_without_a_discriminator_its_defaults_wait_for_the_algorithm(tmp_path):
 def test_gail_ignores_the_clock_only_where_it_is_observed():
     spec = load_spec(spec_file("liver_tour"), ["irl.algorithm=gail"])
     assert ("elapsed" in spec.observation.terms()) == (spec.irl.discriminator.ignore == ["elapsed"])
+
+
+def test_an_old_spec_yaml_with_a_removed_option_at_its_one_value_still_loads(tmp_path):
+    spec = load_spec(spec_file("imagecentring"), ["irl.algorithm=airl"])
+    old = spec.model_dump(mode="json")
+    old["irl"]["discriminator"]["entropy"] = True  # removed: the generator's AIRL reward always keeps -log pi
+    (tmp_path / "spec.yaml").write_text(yaml.safe_dump(old))
+    assert load_spec(tmp_path / "spec.yaml") == spec
+    old["irl"]["discriminator"]["entropy"] = False
+    (tmp_path / "spec.yaml").write_text(yaml.safe_dump(old))
+    with pytest.raises(SpecError, match="entropy"):
+        load_spec(tmp_path / "spec.yaml")

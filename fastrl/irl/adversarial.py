@@ -32,7 +32,6 @@ class AdversarialCallback(BaseCallback):
         batch_size: int = 256,
         lr: float = 3e-4,
         seed: int = 0,
-        entropy: bool = True,
         history: int = 0,
         scale_reward: bool = False,
         gradient_penalty: float = 0.0,
@@ -40,7 +39,7 @@ class AdversarialCallback(BaseCallback):
         ranking_weight: float = 0.0,
     ):
         super().__init__()
-        self.disc, self.expert, self.n_epochs, self.entropy = disc, expert, epochs, entropy
+        self.disc, self.expert, self.n_epochs = disc, expert, epochs
         self.fit = DiscriminatorFit(disc, lr=lr, batch_size=batch_size, seed=seed, gradient_penalty=gradient_penalty)
         self.history = PolicyHistory(history, seed) if history else None
         self.scale_reward = scale_reward
@@ -106,7 +105,7 @@ class AdversarialCallback(BaseCallback):
         with torch.no_grad():
             s, s2 = augment(torch.as_tensor(obs)), augment(torch.as_tensor(nxt))
             t, lp = torch.as_tensor(term), torch.as_tensor(log_pi)
-            reward = self.disc.generator_reward(s, s2, t, lp, self.entropy) + self.disc.terminal_bonus(t)
+            reward = self.disc.generator_reward(s, s2, t, lp) + self.disc.terminal_bonus(t)
             learned = reward.numpy().reshape(n, e)
         self.stats["irl/generator_reward"] = float(learned.mean())
         if self.scale_reward:

@@ -167,7 +167,6 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
             batch_size=d.batch_size,
             lr=d.learning_rate,
             seed=spec.train.seed,
-            entropy=d.entropy,
             history=d.history,
             scale_reward=d.scale_reward,
             gradient_penalty=d.gradient_penalty,

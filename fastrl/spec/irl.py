@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 
 class Strict(BaseModel):
@@ -21,8 +21,21 @@ class Demonstrations(Strict):
     seed: int = Field(0, ge=0, description="seed of the first scripted-expert demonstration")
 
 
+# Options removed because no shipped spec or documented result used them, with the one value they now have: a run's
+# spec.yaml written before holds them, and loads while it holds that value.
+REMOVED = {"entropy": True}
+
+
 class DiscriminatorSettings(Strict):
     """The discriminator network and how it is trained."""
+
+    @model_validator(mode="before")
+    @classmethod
+    def _drop_removed(cls, data):
+        """Drop removed options that hold their one value (any other value stays, an unknown-field error)."""
+        if isinstance(data, dict):
+            data = {k: v for k, v in data.items() if not (k in REMOVED and v == REMOVED[k])}
+        return data
 
     hidden: list[int] = [64, 64]
     learning_rate: float = Field(3e-4, gt=0)
@@ -91,7 +104,6 @@ class DiscriminatorSettings(Strict):
         "resolved when the spec is loaded, on for PPO, off for SAC, whose squashed Gaussian gives the expert's "
         "saturated actions a log pi of hundreds, which decides D on its own",
     )
-    entropy: bool = Field(True, description="AIRL on PPO: the generator's reward keeps -log pi (max-entropy form)")
     scale_reward: bool | None = Field(
         None,
         description="on-policy (PPO): divide the generator's learned reward by "
