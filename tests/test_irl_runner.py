@@ -29,7 +29,6 @@ TINY = [
     "evaluate.image_every=0",
     "episode.time_limit=8",
     "irl.demonstrations.expert=2",
-    "irl.discriminator.batch_size=64",
     "evaluate.periodic_every=256",
     "evaluate.periodic_episodes=1",
 ]

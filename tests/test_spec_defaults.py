@@ -67,6 +67,7 @@ def test_an_old_spec_yaml_with_a_removed_option_at_its_one_value_still_loads(tmp
     spec = load_spec(spec_file("imagecentring"), ["irl.algorithm=airl"])
     old = spec.model_dump(mode="json")
     old["irl"]["discriminator"]["entropy"] = True  # removed: the generator's AIRL reward always keeps -log pi
+    old["irl"]["discriminator"]["batch_size"] = 256  # removed: the discriminator's minibatches are 256 rows
     (tmp_path / "spec.yaml").write_text(yaml.safe_dump(old))
     assert load_spec(tmp_path / "spec.yaml") == spec
     old["irl"]["discriminator"]["entropy"] = False

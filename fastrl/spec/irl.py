@@ -23,7 +23,7 @@ class Demonstrations(Strict):
 
 # Options removed because no shipped spec or documented result used them, with the one value they now have: a run's
 # spec.yaml written before holds them, and loads while it holds that value.
-REMOVED = {"entropy": True}
+REMOVED = {"entropy": True, "batch_size": 256}
 
 
 class DiscriminatorSettings(Strict):
@@ -39,7 +39,6 @@ class DiscriminatorSettings(Strict):
 
     hidden: list[int] = [64, 64]
     learning_rate: float = Field(3e-4, gt=0)
-    batch_size: int = Field(256, ge=2)
     epochs: int = Field(2, ge=1, description="on-policy (PPO): passes over each rollout")
     steps: int = Field(4, ge=1, description="off-policy (SAC): gradient steps after each rollout")
     every: int = Field(
