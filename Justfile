@@ -22,10 +22,11 @@ bench:
 bench-run spec=spec:
     MUJOCO_GL=egl python bench/run_profile.py --spec {{spec}}
 
-# lint and format check
+# lint, format check and the import layers
 lint:
     ruff check fastrl tests bench
     ruff format --check fastrl tests bench
+    lint-imports --no-logo
 
 # validate every bundled spec
 check:
