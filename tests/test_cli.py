@@ -186,5 +186,5 @@ def test_console_script(tmp_path):
     )
     assert proc.returncode == 2
     assert proc.stdout.startswith(f"ok  {GOOD[1]}  (periscoping, 5 subtasks, discrete)")
-    assert proc.stderr.startswith(f"{bad}:6: expected ',' or ']'")
+    assert proc.stderr.startswith(f"{bad}:6: the list '[...]' opened at line 6 is not closed with ']'")
     assert "Traceback" not in proc.stderr and "\x1b[" not in proc.stdout  # no colour codes in a pipe

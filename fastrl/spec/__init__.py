@@ -11,7 +11,15 @@ from .models import Avatar, Cue, DomeScene, Line, Portal, Scope, Task, TaskSpec
 
 def load_spec(path, overrides=()) -> TaskSpec:
     """Load and validate a task spec YAML; raises SpecError listing every problem."""
-    return load_model(path, TaskSpec, list(overrides), context={"base": Path(path).resolve().parent})
+    return load_model(path, TaskSpec, list(overrides), context={"base": _folder(path)})
+
+
+def _folder(path) -> Path:
+    """The folder a spec's relative paths start from (its real location; a symlink loop is reported on reading)."""
+    try:
+        return Path(path).resolve().parent
+    except (OSError, RuntimeError):
+        return Path(path).absolute().parent
 
 
 def spec_hash(spec: TaskSpec) -> str:

@@ -33,4 +33,4 @@ NonNeg = Annotated[float, Field(ge=0)]
 class Strict(BaseModel):
     """Base: frozen, unknown keys are errors."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)

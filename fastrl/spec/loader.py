@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import copy
 import difflib
-import os
+import math
 import re
 import types
 import typing
@@ -16,6 +16,10 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ValidationError
 from yaml.nodes import MappingNode, SequenceNode
+
+from .limits import MAX_INT, MAX_SPEC_BYTES, open_regular
+from .yamlsafe import LimitError, plain_yaml_problem
+from .yamlsafe import Loader as _Loader
 
 
 @dataclass(frozen=True)
@@ -29,7 +33,8 @@ class SpecIssue:
 
     def __str__(self) -> str:
         where = self.file if self.line is None else f"{self.file}:{self.line}"
-        return f"{where}: {self.path}: {self.message}" if self.path else f"{where}: {self.message}"
+        message = " ".join(self.message.split())  # always one line
+        return f"{where}: {self.path}: {message}" if self.path else f"{where}: {message}"
 
 
 class SpecError(Exception):
@@ -55,49 +60,22 @@ class LineMap:
         return self.lines[path] if path else self.root
 
 
-# YAML 1.1 reads 1e-3 / 3e5 / 1.5e3 as strings; this extra resolver makes them floats.
-_FLOAT_EXP = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$")
-
-
-class _Loader(yaml.SafeLoader):
-    """SafeLoader that rejects duplicate keys and reads 1e-3 / 3e5 as floats."""
-
-    def __init__(self, stream):
-        super().__init__(stream)
-        self._checked: set[int] = set()
-
-    def flatten_mapping(self, node):
-        if id(node) not in self._checked:  # check before merge keys (<<) are folded in
-            self._checked.add(id(node))
-            seen: dict[Any, int] = {}
-            for key_node, _ in node.value:
-                if key_node.tag == "tag:yaml.org,2002:merge":
-                    continue
-                key = self.construct_object(key_node, deep=True)
-                try:
-                    dup = key in seen
-                except TypeError:
-                    continue  # unhashable key: the base constructor reports it
-                if dup:
-                    msg = f"duplicate key {key!r} (first at line {seen[key]})"
-                    raise yaml.constructor.ConstructorError(None, None, msg, key_node.start_mark)
-                seen[key] = key_node.start_mark.line + 1
-        super().flatten_mapping(node)
-
-
-_Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_EXP, list("-+0123456789."))
-
-
 def _fail(file: str, line: int | None, message: str) -> SpecError:
     return SpecError([SpecIssue(file, line, "", message)])
 
 
-def _yaml_error(file: str, err: yaml.YAMLError) -> SpecError:
+def _yaml_error(file: str, err: yaml.YAMLError, text: str = "") -> SpecError:
+    if isinstance(err, yaml.reader.ReaderError):
+        line = text[: err.position].count("\n") + 1 if text else None
+        return _fail(file, line, f"character U+{err.character:04X} is not allowed in a YAML file (a control character)")
+    if isinstance(err, LimitError):
+        return SpecError([SpecIssue(file, err.line, err.path, err.message)])
     mark, ctx_mark = getattr(err, "problem_mark", None), getattr(err, "context_mark", None)
     if mark is None:
-        return _fail(file, None, f"invalid YAML: {err}")
-    ctx = f" ({err.context}" + (f" at line {ctx_mark.line + 1})" if ctx_mark else ")")
-    return _fail(file, mark.line + 1, (err.problem or "invalid YAML") + (ctx * bool(err.context)))
+        return _fail(file, None, "invalid YAML: " + " ".join(str(err).split()))
+    context_line = ctx_mark.line + 1 if ctx_mark else None
+    at_end = "end of stream" in str(err.problem) and context_line is not None  # where the unclosed thing starts
+    return _fail(file, context_line if at_end else mark.line + 1, plain_yaml_problem(err, context_line))
 
 
 def _record_lines(loader: _Loader, node, path: tuple, lines: dict, active: set) -> None:
@@ -117,20 +95,31 @@ def _record_lines(loader: _Loader, node, path: tuple, lines: dict, active: set) 
     active.discard(id(node))
 
 
+def _yaml_loader(file: str, text: str) -> _Loader:
+    try:
+        return _Loader(text)
+    except yaml.YAMLError as e:  # the reader checks every character first
+        raise _yaml_error(file, e, text) from None
+
+
 def read_yaml(path) -> tuple[Any, LineMap]:
     """Parse a YAML file safely into plain data plus a LineMap; any problem raises SpecError."""
     file = str(path)
     try:
-        with open(os.fspath(path), "rb") as fh:
-            raw = fh.read()
-    except OSError as e:
-        raise _fail(file, None, f"cannot read file: {e.strerror or e}") from None
+        with open_regular(path, MAX_SPEC_BYTES) as fh:
+            raw = fh.read(MAX_SPEC_BYTES + 1)
+    except (OSError, ValueError) as e:
+        raise _fail(
+            file, None, str(e) if isinstance(e, ValueError) else f"cannot read file: {e.strerror or e}"
+        ) from None
+    if len(raw) > MAX_SPEC_BYTES:
+        raise _fail(file, None, f"file is too large: more than {MAX_SPEC_BYTES:,} bytes")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as e:
         line = raw[: e.start].count(b"\n") + 1
         raise _fail(file, line, f"file is not valid UTF-8 (byte offset {e.start})") from None
-    loader, lines = _Loader(text), {}
+    loader, lines = _yaml_loader(file, text), {}
     try:
         node = loader.get_single_node()
         data = None if node is None else loader.construct_document(node)
@@ -150,11 +139,14 @@ def read_yaml(path) -> tuple[Any, LineMap]:
 
 def yaml_scalar(text: str) -> Any:
     """Parse an override value as a YAML scalar or flow value; ValueError if malformed."""
-    loader = _Loader(text)  # a SafeLoader: only plain data, never objects
+    try:
+        loader = _yaml_loader("--set", text)  # a SafeLoader: only plain data, never objects
+    except SpecError as e:
+        raise ValueError(f"invalid value {text!r}: {e.errors[0].message}") from None
     try:
         value = loader.get_single_data()
     except yaml.YAMLError as e:
-        raise ValueError(f"invalid value {text!r}: {getattr(e, 'problem', None) or e}") from None
+        raise ValueError(f"invalid value {text!r}: {_yaml_error('--set', e).errors[0].message}") from None
     finally:
         loader.dispose()
     if value is None and text.strip() not in ("", "~", "null", "Null", "NULL"):
@@ -281,26 +273,52 @@ def _message(err: dict, data: Any, path: tuple, model_cls: type[BaseModel]) -> s
         known = {n for m in _models_at(model_cls, loc[:-1]) for n in _fields(m)}
         close = difflib.get_close_matches(str(loc[-1]), sorted(known), n=1)
         return f"unknown field {loc[-1]!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
+    if kind == "finite_number":
+        return f"expected a finite number, got {err['input']!r}"
     return re.sub(r"^(Value error|Assertion failed), ", "", err["msg"])
+
+
+def number_problems(data: Any) -> list[tuple[tuple, str]]:
+    """(path, problem) for every non-finite number (.inf, .nan) and every integer beyond 2^63 - 1 in the data."""
+    problems, stack = [], [(data, ())]
+    while stack:
+        node, path = stack.pop()
+        if isinstance(node, dict):
+            stack += [(v, path + (k,)) for k, v in node.items()]
+        elif isinstance(node, list):
+            stack += [(v, path + (i,)) for i, v in enumerate(node)]
+        elif isinstance(node, float) and not math.isfinite(node):
+            shown = ".nan" if math.isnan(node) else ("-.inf" if node < 0 else ".inf")
+            problems.append((path, f"expected a finite number, got {shown}"))
+        elif isinstance(node, int) and not isinstance(node, bool) and abs(node) > MAX_INT:
+            problems.append((path, f"integer {node:.3g} is too large (at most 2^63 - 1)"))
+    return sorted(problems, key=lambda p: tuple(map(str, p[0])))
 
 
 def load_model(path, model_cls: type[BaseModel], overrides: list[str] = (), context: dict | None = None) -> BaseModel:
     """Read a YAML spec, apply overrides, validate into model_cls; SpecError lists every problem."""
     data, lines = read_yaml(path)
     data, applied = _apply(data, overrides, "--set")
-    try:
-        return model_cls.model_validate(data, context=context)
-    except ValidationError as exc:
-        issues = []
-        for err in exc.errors():
-            where = _clean_loc(data, tuple(err["loc"]), keep_last=err["type"] == "missing")
-            dotted, message = ".".join(map(str, where)), _message(err, data, where, model_cls)
-            src = [text for p, text in applied if where[: len(p)] == p]  # overridden path?
-            if src:
-                issue = SpecIssue("--set", None, dotted, f"{message} (from --set {src[-1]!r})")
-            else:
-                issue = SpecIssue(str(path), lines.line_for(where), dotted, message)
-            if issue not in issues:
-                issues.append(issue)
-        issues.sort(key=lambda i: (i.line is None, i.line or 0))
-        raise SpecError(issues) from None
+    issues = []
+
+    def add(where: tuple, message: str) -> None:
+        dotted = ".".join(map(str, where))
+        src = [text for p, text in applied if where[: len(p)] == p]  # overridden path?
+        if src:
+            issue = SpecIssue("--set", None, dotted, f"{message} (from --set {src[-1]!r})")
+        else:
+            issue = SpecIssue(str(path), lines.line_for(where), dotted, message)
+        if issue not in issues:
+            issues.append(issue)
+
+    for where, message in number_problems(data):
+        add(where, message)
+    if not issues:
+        try:
+            return model_cls.model_validate(data, context=context)
+        except ValidationError as exc:
+            for err in exc.errors():
+                where = _clean_loc(data, tuple(err["loc"]), keep_last=err["type"] == "missing")
+                add(where, _message(err, data, where, model_cls))
+    issues.sort(key=lambda i: (i.line is None, i.line or 0))
+    raise SpecError(issues) from None

@@ -15,6 +15,7 @@ from .base import NonNeg, Pos, Strict, _fail, _raise
 from .defaults import resolve_defaults
 from .experiment import Experiment
 from .irl import IRL
+from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_SUBTASKS
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
 from .training import Evaluate, Train
 
@@ -88,11 +89,18 @@ class Avatar(Strict):
 class Line(Strict):
     """TraceLines' line on the plate; avatars are placed along it every `spacing` metres."""
 
-    points: list[tuple[float, float]] = Field(min_length=2)
+    points: list[tuple[float, float]] = Field(min_length=2, max_length=MAX_LINE_POINTS)
     spline: bool = False
     spacing: float = Field(0.01, gt=0.002, le=0.1)
     width: float = Field(0.0015, gt=0, le=0.01)
     heading_deg: float = 90.0
+
+
+def line_avatars(line: Line) -> int:
+    """How many avatars a line places (one every `spacing` metres after its start)."""
+    pts = np.asarray(line.points, float)
+    dense = geo.catmull_rom(pts) if line.spline else pts
+    return len(geo.sample_polyline(dense, line.spacing)) - 1
 
 
 class Landmark(Strict):
@@ -106,9 +114,9 @@ class Task(Strict):
     """Which task, its avatars, line or landmarks, and the default cue."""
 
     kind: Literal["image_centring", "periscoping", "trace_lines", "liver_tour"]
-    avatars: list[Avatar] = []
+    avatars: list[Avatar] = Field([], max_length=MAX_SUBTASKS)
     line: Line | None = None
-    landmarks: list[Landmark] = []
+    landmarks: list[Landmark] = Field([], max_length=MAX_SUBTASKS)
     cue: Cue = Cue()
     jitter: tuple[NonNeg, NonNeg] = Field(
         (0.0, 0.0), description="random avatar offset at reset: metres on the plate, degrees on the dome"
@@ -118,6 +126,11 @@ class Task(Strict):
     def _targets(self):
         if self.kind == "trace_lines" and self.line is None:
             raise ValueError("trace_lines needs a 'line'")
+        if self.line is not None:
+            n = line_avatars(self.line)
+            if n > MAX_SUBTASKS:
+                spacing = self.line.spacing
+                _fail("line", f"the line places {n:,} avatars {spacing:g} m apart, at most {MAX_SUBTASKS} are allowed")
         if self.kind == "liver_tour":
             if not self.landmarks:
                 raise ValueError("liver_tour needs at least one landmark")
@@ -134,6 +147,19 @@ class Episode(Strict):
     control_hz: float = Field(20.0, ge=1, le=1000)
     substeps: int = Field(25, ge=1, le=200)
     time_limit: Pos = 60.0
+
+    @model_validator(mode="after")
+    def _steps(self):
+        steps = round(self.time_limit * self.control_hz)
+        if steps < 1:
+            step = 1 / self.control_hz
+            _fail("time_limit", f"time limit {self.time_limit:g} s is shorter than one control step ({step:g} s)")
+        if steps > MAX_EPISODE_STEPS:
+            _fail(
+                "time_limit",
+                f"time limit {self.time_limit:g} s is {steps:,} control steps, at most {MAX_EPISODE_STEPS:,} allowed",
+            )
+        return self
 
 
 class Actions(Strict):

@@ -12,7 +12,7 @@ from .learners import LEARNERS, LearnerKind
 class Params(BaseModel):
     """Base for hyperparameter sets: unknown names are errors."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
 
 class PPOParams(Params):
@@ -64,7 +64,7 @@ class SACParams(Params):
 class Normalize(BaseModel):
     """Running normalisation of observations and rewards (VecNormalize)."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
     obs: bool = True
     reward: bool | None = Field(
         None,
@@ -77,7 +77,7 @@ class Normalize(BaseModel):
 class Train(BaseModel):
     """Which algorithm, its hyperparameters (one section per algorithm), budget, parallel envs, seed."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
     algo: Literal["PPO", "SAC"] = "PPO"
     timesteps: int = Field(500_000, ge=1)
     n_envs: int = Field(8, ge=1, le=256)
@@ -102,7 +102,7 @@ class Train(BaseModel):
 class Evaluate(BaseModel):
     """Deterministic evaluation episodes after training, and what of them goes into the recording."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
     episodes: int = Field(20, ge=1)
     seed: int = Field(10_000, ge=0)
     image_every: int = Field(4, ge=0, description="log the endoscope image every k steps (0: never)")
