@@ -16,7 +16,10 @@ def import_poses_(
     spec: SpecArg,
     csv_file: Annotated[Path, typer.Argument(metavar="FILE.csv", help="tracked scope poses", show_default=False)],
     output: Annotated[
-        Path | None, typer.Option("-o", "--output", help="trajectory to write (default: FILE.npz)", show_default=False)
+        Path | None,
+        typer.Option(
+            "-o", "--output", help="trajectory .npz, or a folder for it (default: FILE.npz)", show_default=False
+        ),
     ] = None,
     subject: Annotated[str | None, typer.Option(help="who held the scope")] = None,
     skill: Annotated[
@@ -36,6 +39,7 @@ def import_poses_(
     from ..data import TrajectoryError
     from ..data.poses import PoseError, import_poses
 
+    target = output_path(csv_file, output)
     task = load_or_exit(spec)
     meta = {"source": source}
     meta.update(
@@ -54,7 +58,6 @@ def import_poses_(
         raise typer.Exit(code=2) from None
     for line in report:
         out.print(line, markup=False)
-    target = output if output is not None else csv_file.with_suffix(".npz")
     try:
         traj.save(target)
     except OSError as e:
@@ -64,6 +67,18 @@ def import_poses_(
         f"wrote {escape(str(target))}  ({len(traj.time)} samples, {traj.time[-1]:.2f} s, "
         f"source {escape(str(traj.meta['source']))})"
     )
+
+
+def output_path(csv_file: Path, output: Path | None) -> Path:
+    """Where the trajectory goes: -o FILE.npz, FILE.npz inside an -o folder, else beside the CSV; exit 2 if not .npz."""
+    if output is None:
+        return csv_file.with_suffix(".npz")
+    if output.is_dir():
+        return output / csv_file.with_suffix(".npz").name
+    if output.suffix != ".npz":
+        err.print(f"-o {output}: a trajectory file name ends in .npz (or give an existing folder)", markup=False)
+        raise typer.Exit(code=2)
+    return output
 
 
 def _number_or_text(label: str | None):

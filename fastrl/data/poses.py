@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import io
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -11,6 +12,7 @@ import numpy as np
 
 from ..model.portal import mat_to_quat, portal_from_shaft, quat_to_mat, shaft_pose, wrap
 from ..spec import spec_hash, task_hash
+from ..spec.limits import MAX_POSE_BYTES, MAX_POSE_ROWS, MAX_POSE_SECONDS, open_regular
 from .trajectory import Trajectory
 
 COLUMNS = ("time", "x", "y", "z", "qw", "qx", "qy", "qz", "cable")  # s, m (x3), quaternion wxyz, rad
@@ -116,8 +118,23 @@ def portal_from_poses(
     return poses[ok, 0], portal, report
 
 
+def duration_problem(time: np.ndarray, hz: float | None) -> str | None:
+    """Why kept samples span too long a time (or, resampled at hz, too many samples), or None."""
+    span = float(time[-1] - time[0])
+    hint = "is the time column in seconds?"
+    if not math.isfinite(span) or span > MAX_POSE_SECONDS:
+        return f"the samples span {span:.3g} s (t = {time[0]:.6g} to {time[-1]:.6g}), more than a day: {hint}"
+    n = math.floor(span * hz + 1e-9) + 1 if hz else len(time)
+    if n > MAX_POSE_ROWS:
+        return f"{span:.6g} s at {hz:g} Hz is {n:,} samples, at most {MAX_POSE_ROWS:,} are allowed: {hint}"
+    return None
+
+
 def resample(time: np.ndarray, portal: np.ndarray, hz: float) -> tuple[np.ndarray, np.ndarray]:
     """Portal coordinates linearly interpolated at t0 + k / hz (angles roll and cable unwrapped first)."""
+    problem = duration_problem(time, hz)
+    if problem:
+        raise PoseError(problem)
     grid = time[0] + np.arange(int(math.floor((time[-1] - time[0]) * hz + 1e-9)) + 1) / hz
     q = portal.copy()
     q[:, 3:] = np.unwrap(q[:, 3:], axis=0)
@@ -130,7 +147,11 @@ def read_pose_csv(path: Path) -> tuple[np.ndarray, list[int]]:
     """Pose table (T, 9) in COLUMNS order and the file line of each row; PoseError names file and line."""
     path = Path(path)
     try:
-        with path.open(newline="", encoding="utf-8-sig") as f:  # -sig: a spreadsheet's byte-order mark
+        fh = open_regular(path, MAX_POSE_BYTES)  # never blocks on a FIFO; refuses folders and huge files
+    except ValueError as e:
+        raise PoseError(f"{path}: {e}") from None
+    try:
+        with io.TextIOWrapper(fh, encoding="utf-8-sig", newline="") as f:  # -sig: a spreadsheet's byte-order mark
             reader = csv.reader(f)
             header = next(reader, None)
             if header is None:
@@ -146,6 +167,8 @@ def read_pose_csv(path: Path) -> tuple[np.ndarray, list[int]]:
                     continue
                 if len(cells) != len(names):
                     raise PoseError(f"{path}:{reader.line_num}: {len(cells)} fields, the header has {len(names)}")
+                if len(rows) == MAX_POSE_ROWS:
+                    raise PoseError(f"{path}:{reader.line_num}: more than {MAX_POSE_ROWS:,} samples")
                 rows.append([_number(cells[j], path, reader.line_num, COLUMNS[k]) for k, j in enumerate(cols)])
                 lines.append(reader.line_num)
     except (OSError, UnicodeDecodeError, csv.Error) as e:
@@ -183,6 +206,9 @@ def import_poses(
     except PoseError as e:
         raise PoseError(f"{path}: {e}", e.report, e.report.lines(lines, "lines")) from None
     text = report.lines(lines, "lines")
+    problem = duration_problem(time, resample_hz)
+    if problem:
+        raise PoseError(f"{path}: {problem}", report, text)
     if resample_hz:
         raw = len(time)
         time, portal = resample(time, portal, resample_hz)

@@ -10,7 +10,7 @@ from ..agents.expert import ScriptedExpert
 from ..spec import spec_hash, task_hash
 from .episode import EpisodeRecord
 from .loop import EpisodeRecorder, episode_steps
-from .trajectory import Trajectory
+from .trajectory import Trajectory, TrajectoryError
 
 
 def rollout_trajectory(
@@ -44,11 +44,19 @@ def expert_trajectories(env, seeds) -> list[Trajectory]:
     return [rollout_trajectory(env, expert.act, s, meta, expert.reset)[0] for s in seeds]
 
 
+def check_ranges(env, traj: Trajectory) -> None:
+    """Refuse a trajectory whose coordinates the env's portal cannot reach (TrajectoryError naming the first)."""
+    problem = traj.range_problem(env.unwrapped.task.ranges)
+    if problem:
+        raise TrajectoryError(problem)
+
+
 def replay(env, traj: Trajectory, on_sample: Callable | None = None) -> tuple[np.ndarray, list[dict], np.ndarray]:
     """Observations, infos and rewards of a trajectory, recomputed by placing the scope at each sample.
 
     `on_sample(env)`, if given, is called after each sample is placed (to read more of the state).
     """
+    check_ranges(env, traj)
     observations, infos, rewards = [], [], []
     for obs, reward, info, _ in episode_steps(env, int(traj.meta.get("seed", 0)), portal=traj.portal):
         if on_sample is not None:
@@ -95,6 +103,7 @@ def replay_episode(
     env, traj: Trajectory, image_every: int = 0, on_step: Callable | None = None
 ) -> tuple[EpisodeRecord, np.ndarray]:
     """A trajectory replayed as an EpisodeRecord (and its observations); `on_step(step, env)` sees each state."""
+    check_ranges(env, traj)
     seed = int(traj.meta.get("seed", 0))
     rec = EpisodeRecorder(env, image_every=image_every, image=lambda u: u.render())
     observations = []

@@ -4,13 +4,17 @@ from __future__ import annotations
 
 import json
 import zipfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ..spec.limits import MAX_TRAJECTORY_BYTES, open_regular
+from .checks import COORDINATES, meta_problem, npz_members, parse_meta, range_problem, real_array
+
 SOURCES = ("agent", "expert", "human", "synthetic")
-COORDINATES = ("pitch", "yaw", "insertion", "roll", "cable")  # rad, rad, m, rad, rad
+__all__ = ["COORDINATES", "SOURCES", "Trajectory", "TrajectoryError", "load_files", "load_trajectories"]
 
 
 class TrajectoryError(ValueError):
@@ -27,8 +31,13 @@ class Trajectory:
     actions: np.ndarray | None = None  # (T-1, ...) actions between samples, where known
 
     def __post_init__(self):
-        self.time = np.asarray(self.time, float)
-        self.portal = np.asarray(self.portal, float)
+        try:
+            self.time, self.portal = real_array(self.time, "time"), real_array(self.portal, "portal")
+            if self.actions is not None:
+                self.actions = np.asarray(self.actions)
+                real_array(self.actions, "actions")
+        except ValueError as e:
+            raise TrajectoryError(str(e)) from None
         problem = self.problem()
         if problem:
             raise TrajectoryError(problem)
@@ -44,11 +53,20 @@ class Trajectory:
             return f"non-finite values in rows {rows[:5].tolist()}{'...' if len(rows) > 5 else ''}"
         if np.any(np.diff(self.time) <= 0):
             return "time must increase strictly"
-        if self.actions is not None and len(self.actions) != len(self.time) - 1:
-            return f"actions must have T-1 = {len(self.time) - 1} rows, got {len(self.actions)}"
+        if self.actions is not None and (self.actions.ndim == 0 or len(self.actions) != len(self.time) - 1):
+            return f"actions must have T-1 = {len(self.time) - 1} rows, got shape {self.actions.shape}"
+        if self.actions is not None and not np.all(np.isfinite(self.actions)):
+            return "actions hold non-finite values"
+        problem = meta_problem(self.meta)
+        if problem:
+            return problem
         if self.meta.get("source", "agent") not in SOURCES:
             return f"meta.source must be one of {SOURCES}, got {self.meta.get('source')!r}"
         return None
+
+    def range_problem(self, ranges: np.ndarray) -> str | None:
+        """Why these coordinates are impossible for a portal with joint ranges (5, 2), naming the first one, or None."""
+        return range_problem(self.time, self.portal, np.asarray(ranges, float))
 
     def save(self, path: Path) -> Path:
         """Write the .npz (meta as a JSON string)."""
@@ -62,39 +80,56 @@ class Trajectory:
 
     @classmethod
     def load(cls, path: Path) -> Trajectory:
-        """Read and check a .npz; TrajectoryError names the file and the problem."""
+        """Read and check a .npz; TrajectoryError names the file and the problem (never blocks on a FIFO)."""
         path = Path(path)
-        if path.exists() and not zipfile.is_zipfile(path):
-            raise TrajectoryError(f"{path}: not a .npz archive")
         try:
-            with np.load(path, allow_pickle=False) as z:
-                missing = {"time", "portal", "meta"} - set(z.files)
-                if missing:
-                    raise TrajectoryError(f"{path}: missing arrays {sorted(missing)}")
-                meta = json.loads(str(z["meta"]))
-                actions = z["actions"] if "actions" in z.files else None
-                time, portal = z["time"], z["portal"]
-        except (OSError, ValueError, zipfile.BadZipFile, json.JSONDecodeError, EOFError) as e:
-            if isinstance(e, TrajectoryError):
-                raise
-            raise TrajectoryError(f"{path}: not a readable trajectory file ({e})") from None
-        if not isinstance(meta, dict):
-            raise TrajectoryError(f"{path}: meta must be a JSON object")
+            with open_regular(path, MAX_TRAJECTORY_BYTES) as fh:
+                npz_members(fh)
+                with np.load(fh, allow_pickle=False) as z:
+                    missing = {"time", "portal", "meta"} - set(z.files)
+                    if missing:
+                        raise TrajectoryError(f"{path}: missing arrays {sorted(missing)}")
+                    meta = parse_meta(z["meta"])
+                    actions = z["actions"] if "actions" in z.files else None
+                    time, portal = z["time"], z["portal"]
+        except TrajectoryError:
+            raise
+        except (OSError, ValueError, zipfile.BadZipFile, EOFError, KeyError, zlib.error, NotImplementedError) as e:
+            raise TrajectoryError(f"{path}: {_reason(e)}") from None
         try:
             return cls(time, portal, meta, actions)
         except TrajectoryError as e:
             raise TrajectoryError(f"{path}: {e}") from None
 
 
-def load_trajectories(paths) -> tuple[list[Trajectory], list[str]]:
-    """Load every .npz under the given files or folders; bad files become messages, the rest load."""
-    files = []
-    for p in map(Path, paths):
-        files += sorted(p.glob("*.npz")) if p.is_dir() else [p]
+def _reason(error: Exception) -> str:
+    """What went wrong reading a file, in one line."""
+    if isinstance(error, OSError):
+        return f"cannot read file: {error.strerror or error}"
+    text = " ".join(str(error).split())
+    plain = isinstance(error, ValueError) and not isinstance(error, zipfile.BadZipFile)
+    return text if plain and text else f"not a readable trajectory file ({text or type(error).__name__})"
+
+
+def load_files(files, ranges: np.ndarray | None = None) -> tuple[list[tuple[Path, Trajectory]], list[str]]:
+    """Load each file (and, given joint ranges (5, 2), check its coordinates); bad files become messages."""
     good, errors = [], []
-    for f in files:
+    for f in map(Path, files):
         try:
-            good.append(Trajectory.load(f))
+            traj = Trajectory.load(f)
+            problem = traj.range_problem(ranges) if ranges is not None else None
+            if problem:
+                raise TrajectoryError(f"{f}: {problem}")
+            good.append((f, traj))
         except TrajectoryError as e:
             errors.append(str(e))
     return good, errors
+
+
+def load_trajectories(paths, ranges: np.ndarray | None = None) -> tuple[list[Trajectory], list[str]]:
+    """Load every .npz under the given files or folders; bad files become messages naming them, the rest load."""
+    files = []
+    for p in map(Path, paths):
+        files += sorted(p.glob("*.npz")) if p.is_dir() else [p]
+    good, errors = load_files(files, ranges)
+    return [traj for _, traj in good], errors

@@ -15,10 +15,11 @@ from scipy.stats import spearmanr
 
 from ..assess.scoring import Scorer, TrajectoryScores
 from ..data.cohort import make_cohort
-from ..data.trajectory import Trajectory
+from ..data.trajectory import Trajectory, load_files
 from ..irl.networks import load_networks
 from ..log.experiment import log_experiment, plot_correlations
 from ..model.compiler import compile_task
+from ..model.scope import joint_ranges
 from ..spec import load_spec
 from ..spec.models import TaskSpec
 from .rundir import latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
@@ -85,7 +86,10 @@ def write_cohort(spec: TaskSpec, folder: Path, console: Console, progress: bool)
                 traj.save(folder / f"{traj.meta['subject']}.npz")
                 bar.advance(task)
         paths = sorted(folder.glob("*.npz"))
-    return [(p.stem, Trajectory.load(p)) for p in paths]
+    loaded, errors = load_files(paths, joint_ranges(spec.scope))
+    for message in errors:  # a damaged file is named and left out; the rest of the cohort goes on
+        console.print(f"skipped {message}", markup=False, highlight=False, style="yellow")
+    return [(p.stem, traj) for p, traj in loaded]
 
 
 def pick_best(scored: list[TrajectoryScores], k: int) -> list[str]:

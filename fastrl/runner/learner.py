@@ -21,6 +21,7 @@ from ..irl import AdversarialCallback, Discriminator, OffPolicyAdversarialCallba
 from ..irl.averaging import RewardAveraging
 from ..irl.demonstrations import expert_transitions
 from ..irl.ranking import RankedRollouts
+from ..model.scope import joint_ranges
 from ..spec.models import TaskSpec
 from .demos import write_demos
 
@@ -83,7 +84,7 @@ def demonstrations(spec: TaskSpec, run: Path, console: Console, progress: bool) 
         folder = run / "demos"
         if len(list(folder.glob("*.npz"))) < cfg.expert:
             write_demos(folder, cfg.expert, cfg.seed, expert_spec=spec, progress=progress)
-    trajs, errors = load_trajectories([folder])
+    trajs, errors = load_trajectories([folder], joint_ranges(spec.scope))
     mode = spec.actions.mode
     usable = []
     for traj in trajs:

@@ -27,6 +27,7 @@ RANGE_TOLERANCE = (0.05, 0.05, 0.005, 0.05, 0.05)  # rad, rad, m, rad, rad past 
 # Pose CSVs
 MAX_POSE_BYTES = 256 * 1024 * 1024
 MAX_POSE_ROWS = MAX_TRAJECTORY_SAMPLES  # rows read, and samples after resampling
+MAX_POSE_SECONDS = 86_400  # time span of the accepted samples
 
 LIMITS = [
     ("spec file size", f"{MAX_SPEC_BYTES // 1024} KiB", "a larger file is refused before it is parsed"),
@@ -44,6 +45,7 @@ LIMITS = [
     ("portal coordinates", "joint range + (0.05 rad, 0.05 rad, 5 mm, 0.05 rad, 0.05 rad)", "else refused"),
     ("pose CSV size", f"{MAX_POSE_BYTES // 2**20} MiB", ""),
     ("pose CSV rows, and samples after resampling", f"{MAX_POSE_ROWS:,}", ""),
+    ("pose CSV time span", "one day (86,400 s)", "a larger span is refused: is the time column in seconds?"),
 ]
 
 
