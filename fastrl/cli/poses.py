@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated
 
@@ -89,4 +90,6 @@ def _number_or_text(label: str | None):
         value = float(label)
     except ValueError:
         return label
+    if not math.isfinite(value):
+        return label  # "nan", "inf": a label, not a number to rank
     return int(value) if value.is_integer() else value

@@ -13,7 +13,7 @@ import numpy as np
 from ..model.portal import mat_to_quat, portal_from_shaft, quat_to_mat, shaft_pose, wrap
 from ..spec import spec_hash, task_hash
 from ..spec.limits import MAX_POSE_BYTES, MAX_POSE_ROWS, MAX_POSE_SECONDS, open_regular
-from .trajectory import Trajectory
+from .trajectory import Trajectory, TrajectoryError
 
 COLUMNS = ("time", "x", "y", "z", "qw", "qx", "qy", "qz", "cable")  # s, m (x3), quaternion wxyz, rad
 QUAT_NORM_TOLERANCE = 0.01  # |norm - 1| above this is not a rotation
@@ -78,6 +78,12 @@ def portal_from_poses(
 
     Rejected rows are dropped; PoseError if fewer than 2 remain or more than max_rejected of them go.
     """
+    with np.errstate(over="ignore", invalid="ignore"):  # rows of 1e300 overflow: rejected, not warned about
+        return _portal_from_poses(task, poses, tolerance_mm, tolerance_deg, max_rejected)
+
+
+def _portal_from_poses(task, poses, tolerance_mm: float, tolerance_deg: float, max_rejected: float):
+    """portal_from_poses, without its floating-point error state."""
     poses = np.asarray(poses, float)
     if poses.ndim != 2 or poses.shape[1] != len(COLUMNS):
         raise ValueError(f"a pose table has shape (T, {len(COLUMNS)}) in the order {COLUMNS}, got {poses.shape}")
@@ -125,6 +131,8 @@ def duration_problem(time: np.ndarray, hz: float | None) -> str | None:
     if not math.isfinite(span) or span > MAX_POSE_SECONDS:
         return f"the samples span {span:.3g} s (t = {time[0]:.6g} to {time[-1]:.6g}), more than a day: {hint}"
     n = math.floor(span * hz + 1e-9) + 1 if hz else len(time)
+    if n < 2:
+        return f"the samples span {span:.3g} s, less than one sample period at {hz:g} Hz: {hint}"
     if n > MAX_POSE_ROWS:
         return f"{span:.6g} s at {hz:g} Hz is {n:,} samples, at most {MAX_POSE_ROWS:,} are allowed: {hint}"
     return None
@@ -225,4 +233,7 @@ def import_poses(
         "time_offset": float(time[0]),
         **meta,
     }
-    return Trajectory(time - time[0], portal, meta), text
+    try:
+        return Trajectory(time - time[0], portal, meta), text
+    except TrajectoryError as e:
+        raise PoseError(f"{path}: {e}", report, text) from None

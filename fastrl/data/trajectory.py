@@ -107,6 +107,8 @@ def _reason(error: Exception) -> str:
     if isinstance(error, OSError):
         return f"cannot read file: {error.strerror or error}"
     text = " ".join(str(error).split())
+    if "pickled" in text:
+        return "holds pickled Python objects (an object array), which are never loaded"
     plain = isinstance(error, ValueError) and not isinstance(error, zipfile.BadZipFile)
     return text if plain and text else f"not a readable trajectory file ({text or type(error).__name__})"
 

@@ -32,9 +32,14 @@ class SpecIssue:
     message: str
 
     def __str__(self) -> str:
-        where = self.file if self.line is None else f"{self.file}:{self.line}"
-        message = " ".join(self.message.split())  # always one line
-        return f"{where}: {self.path}: {message}" if self.path else f"{where}: {message}"
+        file, path, message = _printable(self.file), _printable(self.path), _printable(" ".join(self.message.split()))
+        where = file if self.line is None else f"{file}:{self.line}"
+        return f"{where}: {path}: {message}" if path else f"{where}: {message}"
+
+
+def _printable(text: str) -> str:
+    """Text with control characters escaped, so an issue is always one line."""
+    return text if text.isprintable() else "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 class SpecError(Exception):
