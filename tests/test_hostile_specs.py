@@ -134,6 +134,13 @@ CASES = [
         "",
         "quoted text that starts at line 7",
     ),
+    Case(
+        "missing_colon",
+        sub(IC, "  radius: 0.12 ", "  radius 0.12 "),
+        line_of(IC, "  radius: 0.12 "),
+        "",
+        "neither 'key: value' nor a list item",
+    ),
     Case("python_tag", sub(IC, "name: imagecentring", "name: !!python/object:os.system x"), 7, "", "tag"),
 ]
 
@@ -215,3 +222,19 @@ def test_limits_are_listed_for_the_docs():
     """The limits table names every limit once with its value."""
     names = [name for name, _, _ in LIMITS]
     assert len(names) == len(set(names)) and all(str(value) for _, value, _ in LIMITS)
+
+
+def test_a_fifo_or_folder_as_an_organ_mesh_is_refused_at_its_line(tmp_path):
+    """An organ's mesh that is a FIFO (MuJoCo would block reading it) or a folder: an issue at the mesh line."""
+    text = (SPECS / "liver_tour.yaml").read_text(encoding="utf-8")
+    os.mkfifo(tmp_path / "fifo.obj")
+    (tmp_path / "folder.obj").mkdir()
+    for name in ("fifo.obj", "folder.obj"):
+        path = tmp_path / f"{name}.yaml"
+        old = "left_lobe:   {centre"
+        path.write_text(sub(text, old, f"left_lobe:   {{mesh: {name}, centre"), encoding="utf-8")
+        with pytest.raises(SpecError) as exc:
+            load_spec(path)
+        [issue] = exc.value.errors
+        assert (issue.line, issue.path) == (line_of(text, old), "scene.anatomy.left_lobe.mesh")
+        assert issue.message == f"mesh {name} is not a regular file"

@@ -15,6 +15,7 @@ MAX_INT = 2**63 - 1  # integers beyond this do not fit numpy, torch or MuJoCo
 MAX_LINE_POINTS = 100  # task.line.points (a shipped line has 4)
 MAX_SUBTASKS = 500  # avatars, landmarks, or avatars placed along the line
 MAX_EPISODE_STEPS = 1_000_000  # episode.time_limit * episode.control_hz
+MAX_MESH_BYTES = 64 * 1024 * 1024  # an organ's OBJ or STL file
 
 # Trajectory files (.npz)
 MAX_TRAJECTORY_BYTES = 256 * 1024 * 1024  # on disk, and the arrays after decompression
@@ -39,6 +40,7 @@ LIMITS = [
     ("task.line.points", MAX_LINE_POINTS, ""),
     ("subtasks (avatars, landmarks, avatars along the line)", MAX_SUBTASKS, ""),
     ("episode steps (time_limit x control_hz)", f"1 to {MAX_EPISODE_STEPS:,}", ""),
+    ("organ mesh file (OBJ, STL)", f"{MAX_MESH_BYTES // 2**20} MiB", "a regular file"),
     ("trajectory file size", f"{MAX_TRAJECTORY_BYTES // 2**20} MiB", "on disk and decompressed"),
     ("trajectory samples", f"{MAX_TRAJECTORY_SAMPLES:,}", ""),
     ("trajectory metadata", f"{MAX_META_CHARS:,} characters, {MAX_META_DEPTH} deep", ""),

@@ -18,7 +18,7 @@ from pydantic import BaseModel, ValidationError
 from yaml.nodes import MappingNode, SequenceNode
 
 from .limits import MAX_INT, MAX_SPEC_BYTES, open_regular
-from .yamlsafe import LimitError, plain_yaml_problem
+from .yamlsafe import LimitError, error_line, plain_yaml_problem
 from .yamlsafe import Loader as _Loader
 
 
@@ -78,9 +78,7 @@ def _yaml_error(file: str, err: yaml.YAMLError, text: str = "") -> SpecError:
     mark, ctx_mark = getattr(err, "problem_mark", None), getattr(err, "context_mark", None)
     if mark is None:
         return _fail(file, None, "invalid YAML: " + " ".join(str(err).split()))
-    context_line = ctx_mark.line + 1 if ctx_mark else None
-    at_end = "end of stream" in str(err.problem) and context_line is not None  # where the unclosed thing starts
-    return _fail(file, context_line if at_end else mark.line + 1, plain_yaml_problem(err, context_line))
+    return _fail(file, error_line(err), plain_yaml_problem(err, ctx_mark.line + 1 if ctx_mark else None))
 
 
 def _record_lines(loader: _Loader, node, path: tuple, lines: dict, active: set) -> None:

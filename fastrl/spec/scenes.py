@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import stat
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -10,6 +11,7 @@ from pydantic import AfterValidator, Field, field_validator, model_validator
 
 from .anatomy import MeshError, organ_vertices
 from .base import NonNeg, Pos, Strict, _raise
+from .limits import MAX_MESH_BYTES
 
 
 class Portal(Strict):
@@ -62,7 +64,16 @@ class Organ(Strict):
         base = (info.context or {}).get("base")
         if v is None or base is None:
             return v
-        return v if Path(v).is_absolute() else str((base / v).resolve())
+        path = Path(v) if Path(v).is_absolute() else base / v
+        try:
+            info_ = path.stat()
+        except (OSError, RuntimeError):
+            return str(path.absolute())  # missing: the scene reports it
+        if not stat.S_ISREG(info_.st_mode):
+            raise ValueError(f"mesh {v} is not a regular file")
+        if info_.st_size > MAX_MESH_BYTES:
+            raise ValueError(f"mesh {v} is {info_.st_size:,} bytes, at most {MAX_MESH_BYTES:,} are read")
+        return str(path.resolve())
 
 
 def _default_anatomy() -> dict[str, Organ]:

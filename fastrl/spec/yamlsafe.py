@@ -135,6 +135,10 @@ _PLAIN = [
     (r"found character '(.)' that cannot start any token", "'{1}' cannot start a value: put the value in quotes"),
     (r"found unexpected end of stream", "a quoted text that starts at line {c} is never closed"),
     (
+        r"could not find expected ':'",
+        "this line is neither 'key: value' nor a list item '- value': a ':' followed by a space is missing",
+    ),
+    (
         r"expected ',' or '\]'",
         "the list '[...]' opened at line {c} is not closed with ']', or its items lack a ',' between them",
     ),
@@ -154,6 +158,18 @@ _PLAIN = [
     (r"found unknown escape character '(.*)'", "unknown escape '\\{1}' in a double-quoted text: use single quotes"),
     (r"expected the node content, but found '(.*)'", "expected a value here, found '{1}'"),
 ]
+
+
+def error_line(err: yaml.YAMLError) -> int | None:
+    """The 1-based line to show for a PyYAML error: where the broken construct starts when PyYAML only noticed
+    later (an unclosed quote at the end of the file, a key without ':' on the next line)."""
+    mark, ctx_mark = getattr(err, "problem_mark", None), getattr(err, "context_mark", None)
+    if mark is None:
+        return None
+    problem = str(getattr(err, "problem", ""))
+    if ctx_mark is not None and ("end of stream" in problem or "could not find expected ':'" in problem):
+        return ctx_mark.line + 1
+    return mark.line + 1
 
 
 def plain_yaml_problem(err: yaml.YAMLError, context_line: int | None) -> str:
