@@ -113,11 +113,14 @@ CASES = [
         "one control step",
     ),
     Case(
+        "time_limit_1e300", sub(IC, "time_limit: 40", "time_limit: 1e300"), 44, "episode.time_limit", "more than a day"
+    ),
+    Case(
         "time_limit_too_many_steps",
-        sub(IC, "time_limit: 40", "time_limit: 1e300"),
+        sub(sub(IC, "time_limit: 40", "time_limit: 3600"), "control_hz: 20 ", "control_hz: 1000 "),
         44,
         "episode.time_limit",
-        "control steps",
+        "3,600,000 control steps, at most 1,000,000",
     ),
     Case(
         "indentation",

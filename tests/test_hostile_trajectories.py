@@ -87,6 +87,25 @@ def test_everything_1e300_and_complex_numbers_are_refused(tmp_path):
             Trajectory.load(write(tmp_path / f"{name}.npz", traj, **arrays))
 
 
+@pytest.mark.parametrize(
+    ("time", "why"),
+    [
+        (np.arange(5) * 1e300, "time spans 4e+300 s, more than a day (86,400 s): is it in seconds?"),
+        (np.arange(5) * 1e-300, "samples 0 and 1 are 1e-300 s apart, less than 1e-06 s: is time in seconds?"),
+        (
+            np.array([0.0, 0.05, 0.1, 1e9, 1e9 + 0.05]),
+            "time spans 1e+09 s, more than a day (86,400 s): is it in seconds?",
+        ),
+    ],
+    ids=["span_1e300", "step_1e-300", "span_1e9"],
+)
+def test_implausible_time_columns_are_refused(time, why):
+    """Times must be plausible seconds: scores (duration, smoothness) of 1e300 s would be inf, not a score."""
+    with pytest.raises(TrajectoryError) as exc:
+        Trajectory(time, np.zeros((5, 5)), {})
+    assert str(exc.value) == why
+
+
 def nested(depth: int) -> str:
     """A JSON object nested depth levels deep."""
     return '{"a": ' * depth + "1" + "}" * depth

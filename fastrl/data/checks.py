@@ -14,9 +14,11 @@ import numpy as np
 from ..spec.limits import (
     MAX_META_CHARS,
     MAX_META_DEPTH,
+    MAX_SECONDS,
     MAX_SEED,
     MAX_TRAJECTORY_BYTES,
     MAX_TRAJECTORY_SAMPLES,
+    MIN_TIME_STEP,
     RANGE_TOLERANCE,
 )
 
@@ -32,6 +34,17 @@ def real_array(value, name: str) -> np.ndarray:
     if a.shape and a.shape[0] > MAX_TRAJECTORY_SAMPLES:
         raise ValueError(f"{name} has {a.shape[0]:,} rows, at most {MAX_TRAJECTORY_SAMPLES:,} are allowed")
     return a.astype(float, copy=False)
+
+
+def time_problem(time: np.ndarray) -> str | None:
+    """Why increasing sample times are not plausible seconds (a span over a day, steps under a microsecond)."""
+    span, step = float(time[-1] - time[0]), np.diff(time)
+    if not span <= MAX_SECONDS:
+        return f"time spans {span:.3g} s, more than a day ({MAX_SECONDS:,} s): is it in seconds?"
+    if step.min() < MIN_TIME_STEP:
+        i = int(np.flatnonzero(step < MIN_TIME_STEP)[0])
+        return f"samples {i} and {i + 1} are {step[i]:.3g} s apart, less than {MIN_TIME_STEP:g} s: is time in seconds?"
+    return None
 
 
 def _whole(value, low: int, high: int) -> bool:

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..spec.limits import MAX_TRAJECTORY_BYTES, open_regular
-from .checks import COORDINATES, meta_problem, npz_members, parse_meta, range_problem, real_array
+from .checks import COORDINATES, meta_problem, npz_members, parse_meta, range_problem, real_array, time_problem
 
 SOURCES = ("agent", "expert", "human", "synthetic")
 __all__ = ["COORDINATES", "SOURCES", "Trajectory", "TrajectoryError", "load_files", "load_trajectories"]
@@ -53,6 +53,9 @@ class Trajectory:
             return f"non-finite values in rows {rows[:5].tolist()}{'...' if len(rows) > 5 else ''}"
         if np.any(np.diff(self.time) <= 0):
             return "time must increase strictly"
+        problem = time_problem(self.time)
+        if problem:
+            return problem
         if self.actions is not None and (self.actions.ndim == 0 or len(self.actions) != len(self.time) - 1):
             return f"actions must have T-1 = {len(self.time) - 1} rows, got shape {self.actions.shape}"
         if self.actions is not None and not np.all(np.isfinite(self.actions)):

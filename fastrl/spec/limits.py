@@ -15,6 +15,8 @@ MAX_INT = 2**63 - 1  # integers beyond this do not fit numpy, torch or MuJoCo
 MAX_LINE_POINTS = 100  # task.line.points (a shipped line has 4)
 MAX_SUBTASKS = 500  # avatars, landmarks, or avatars placed along the line
 MAX_EPISODE_STEPS = 1_000_000  # episode.time_limit * episode.control_hz
+MAX_SECONDS = 86_400  # episode.time_limit, and the time span of a trajectory or pose session
+MIN_TIME_STEP = 1e-6  # s between trajectory samples
 MAX_MESH_BYTES = 64 * 1024 * 1024  # an organ's OBJ or STL file
 
 # Trajectory files (.npz)
@@ -28,7 +30,7 @@ RANGE_TOLERANCE = (0.05, 0.05, 0.005, 0.05, 0.05)  # rad, rad, m, rad, rad past 
 # Pose CSVs
 MAX_POSE_BYTES = 256 * 1024 * 1024
 MAX_POSE_ROWS = MAX_TRAJECTORY_SAMPLES  # rows read, and samples after resampling
-MAX_POSE_SECONDS = 86_400  # time span of the accepted samples
+MAX_POSE_SECONDS = MAX_SECONDS  # time span of the accepted samples
 
 LIMITS = [
     ("spec file size", f"{MAX_SPEC_BYTES // 1024} KiB", "a larger file is refused before it is parsed"),
@@ -40,6 +42,8 @@ LIMITS = [
     ("task.line.points", MAX_LINE_POINTS, ""),
     ("subtasks (avatars, landmarks, avatars along the line)", MAX_SUBTASKS, ""),
     ("episode steps (time_limit x control_hz)", f"1 to {MAX_EPISODE_STEPS:,}", ""),
+    ("episode time limit, trajectory and pose-session time span", "one day (86,400 s)", "is the time in seconds?"),
+    ("time between trajectory samples", "at least 1 microsecond", ""),
     ("organ mesh file (OBJ, STL)", f"{MAX_MESH_BYTES // 2**20} MiB", "a regular file"),
     ("trajectory file size", f"{MAX_TRAJECTORY_BYTES // 2**20} MiB", "on disk and decompressed"),
     ("trajectory samples", f"{MAX_TRAJECTORY_SAMPLES:,}", ""),
@@ -47,7 +51,6 @@ LIMITS = [
     ("portal coordinates", "joint range + (0.05 rad, 0.05 rad, 5 mm, 0.05 rad, 0.05 rad)", "else refused"),
     ("pose CSV size", f"{MAX_POSE_BYTES // 2**20} MiB", ""),
     ("pose CSV rows, and samples after resampling", f"{MAX_POSE_ROWS:,}", ""),
-    ("pose CSV time span", "one day (86,400 s)", "a larger span is refused: is the time column in seconds?"),
 ]
 
 

@@ -15,7 +15,7 @@ from .base import NonNeg, Pos, Strict, _fail, _raise
 from .defaults import resolve_defaults
 from .experiment import Experiment
 from .irl import IRL
-from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_SUBTASKS
+from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_SECONDS, MAX_SUBTASKS
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
 from .training import Evaluate, Train
 
@@ -154,6 +154,8 @@ class Episode(Strict):
         if steps < 1:
             step = 1 / self.control_hz
             _fail("time_limit", f"time limit {self.time_limit:g} s is shorter than one control step ({step:g} s)")
+        if self.time_limit > MAX_SECONDS:
+            _fail("time_limit", f"time limit {self.time_limit:g} s is more than a day ({MAX_SECONDS:,} s)")
         if steps > MAX_EPISODE_STEPS:
             _fail(
                 "time_limit",
