@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +14,7 @@ from stable_baselines3 import PPO, SAC
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
+from ..atomic import DiskFull, atomic_write, fsync_dir, is_disk_full, write_json
 from ..env.fast_env import FastEnv
 from ..spec.models import TaskSpec
 from .lean_sac import LeanSAC
@@ -82,39 +86,103 @@ def _optimizers(model: BaseAlgorithm) -> dict[str, torch.optim.Optimizer]:
 def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict, parts: dict | None = None) -> Path:
     """Write weights and optimizer states (torch tensors only), normalisation stats (npz) and state (JSON).
 
-    `parts` are more objects with state_dict (a discriminator and its optimizer), saved in parts.pt.
+    `parts` are more objects with state_dict (a discriminator and its optimizer), saved in parts.pt. The files go
+    into a hidden directory, fsynced, which is then renamed to `path`: a kill at any moment leaves no
+    half-written checkpoint under that name, and state.json lists every file's sha256 so a damaged one is found.
     """
-    path.mkdir(parents=True, exist_ok=True)
-    optimizers = {k: o.state_dict() for k, o in _optimizers(model).items()}
-    tensors = {"policy": model.policy.state_dict(), "optimizers": optimizers}
-    if isinstance(model, SAC) and model.log_ent_coef is not None:
-        tensors["log_ent_coef"] = model.log_ent_coef.detach().clone()
-    tmp = path / "weights.pt.tmp"
-    torch.save(tensors, tmp)
-    tmp.replace(path / "weights.pt")
-    if parts:
-        torch.save({name: part.state_dict() for name, part in parts.items()}, path / "parts.pt.tmp")
-        (path / "parts.pt.tmp").replace(path / "parts.pt")
-    if isinstance(venv, VecNormalize):
-        np.savez(
-            path / "normalize.npz",
-            obs_mean=venv.obs_rms.mean,
-            obs_var=venv.obs_rms.var,
-            obs_count=venv.obs_rms.count,
-            ret_mean=venv.ret_rms.mean,
-            ret_var=venv.ret_rms.var,
-            ret_count=venv.ret_rms.count,
-        )
-    (path / "state.json").write_text(json.dumps({**state, "timesteps": int(model.num_timesteps)}, indent=2))
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    shutil.rmtree(tmp, ignore_errors=True)
+    tmp.mkdir()
+    try:
+        optimizers = {k: o.state_dict() for k, o in _optimizers(model).items()}
+        tensors = {"policy": model.policy.state_dict(), "optimizers": optimizers}
+        if isinstance(model, SAC) and model.log_ent_coef is not None:
+            tensors["log_ent_coef"] = model.log_ent_coef.detach().clone()
+        atomic_write(tmp / "weights.pt", lambda f: torch.save(tensors, f))
+        if parts:
+            saved = {name: part.state_dict() for name, part in parts.items()}
+            atomic_write(tmp / "parts.pt", lambda f: torch.save(saved, f))
+        if isinstance(venv, VecNormalize):
+            stats = {
+                "obs_mean": venv.obs_rms.mean,
+                "obs_var": venv.obs_rms.var,
+                "obs_count": venv.obs_rms.count,
+                "ret_mean": venv.ret_rms.mean,
+                "ret_var": venv.ret_rms.var,
+                "ret_count": venv.ret_rms.count,
+            }
+            atomic_write(tmp / "normalize.npz", lambda f: np.savez(f, **stats))
+        files = {p.name: file_sha256(p) for p in sorted(tmp.iterdir())}
+        write_json(tmp / "state.json", {**state, "timesteps": int(model.num_timesteps), "files": files})
+        if path.exists():  # the same timesteps saved again (e.g. resumed with nothing left to train)
+            old = path.with_name(f".{path.name}.old-{os.getpid()}")
+            os.replace(path, old)
+            os.replace(tmp, path)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(tmp, path)
+    except BaseException as e:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if is_disk_full(e) and not isinstance(e, DiskFull):
+            raise DiskFull(path) from None
+        raise
+    fsync_dir(path.parent)
     return path
+
+
+def file_sha256(path: Path) -> str:
+    """Hex sha256 of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def checkpoint_problem(path: Path) -> str | None:
+    """Why a checkpoint directory cannot be loaded (missing, torn or damaged files), or None if it is whole."""
+    path = Path(path)
+    try:
+        state = json.loads((path / "state.json").read_text())
+    except FileNotFoundError:
+        return "no state.json (it was being written when the run stopped)"
+    except (OSError, ValueError) as e:
+        return f"state.json does not parse ({e})"
+    if not isinstance(state, dict) or not isinstance(state.get("timesteps"), int):
+        return "state.json has no timesteps"
+    files = state.get("files")
+    if not isinstance(files, dict):  # written before checkpoints listed their files: try loading the weights
+        try:
+            torch.load(path / "weights.pt", map_location="cpu", weights_only=True)
+        except Exception as e:  # any failure to load means the checkpoint is unusable
+            return f"weights.pt does not load ({str(e).splitlines()[0] if str(e) else type(e).__name__})"
+        return None
+    if "weights.pt" not in files:
+        return "state.json lists no weights.pt"
+    for name, digest in files.items():
+        f = path / name
+        if not f.is_file():
+            return f"{name} is missing"
+        if file_sha256(f) != digest:
+            return f"{name} is damaged (its sha256 differs from the one in state.json)"
+    return None
 
 
 class CheckpointMismatch(ValueError):
     """A checkpoint whose tensors do not fit the model the run's spec builds."""
 
 
+class CheckpointDamaged(ValueError):
+    """A checkpoint directory with missing, torn or damaged files."""
+
+
 def load_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv | None, parts: dict | None = None) -> dict:
     """Restore what save_checkpoint wrote into a freshly built model (and its VecNormalize, and parts)."""
+    problem = checkpoint_problem(path)
+    if problem:
+        raise CheckpointDamaged(f"checkpoint {path}: {problem}")
     tensors = torch.load(path / "weights.pt", map_location="cpu", weights_only=True)
     if parts:
         saved = torch.load(path / "parts.pt", map_location="cpu", weights_only=True)
@@ -139,6 +207,7 @@ def load_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv | None, parts
         venv.ret_rms.mean, venv.ret_rms.var, venv.ret_rms.count = z["ret_mean"], z["ret_var"], float(z["ret_count"])
     state = json.loads((path / "state.json").read_text())
     model.num_timesteps = int(state["timesteps"])
+    state.pop("files", None)
     return state
 
 

@@ -255,8 +255,9 @@ def train_and_report(
     spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool, timesteps: int | None
 ) -> None:
     """Start (or resume) a run, turn interruptions and bad input into messages, print the evaluation."""
-    from ..agents.sb3 import CheckpointMismatch
-    from ..runner import EvaluationInterrupted, RunInterrupted, resume_run, start_run
+    from ..agents.sb3 import CheckpointDamaged, CheckpointMismatch
+    from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace, resume_run, start_run
+    from .stops import report_out_of_space, stop_code
 
     try:
         if resume is not None:
@@ -273,15 +274,20 @@ def train_and_report(
             run_dir = start_run(spec, overrides, runs, out, progress)
     except RunInterrupted as stop:
         err.print(
-            f"interrupted at {stop.timesteps} timesteps; checkpoint and recording saved in {stop.run}", markup=False
+            f"{stop.signal_name}: stopped at {stop.timesteps} timesteps; checkpoint and recording saved in {stop.run}",
+            markup=False,
         )
         err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
-        raise typer.Exit(code=130) from None
+        raise typer.Exit(code=stop_code(stop.signal_name)) from None
     except EvaluationInterrupted as stop:
-        err.print(f"evaluation interrupted; the trained policy is saved in {stop.run}/final", markup=False)
-        err.print(f"evaluate it with: fastrl eval {stop.run}", markup=False)
-        raise typer.Exit(code=130) from None
-    except (SpecError, FileNotFoundError, CheckpointMismatch) as e:
+        err.print(
+            f"{stop.signal_name}: evaluation stopped; the trained policy is saved in {stop.run}/final", markup=False
+        )
+        err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
+        raise typer.Exit(code=stop_code(stop.signal_name)) from None
+    except RunOutOfSpace as stop:
+        report_out_of_space(stop)
+    except (SpecError, FileNotFoundError, CheckpointMismatch, CheckpointDamaged) as e:
         exit_with(e)
     results = json.loads((run_dir / "eval.json").read_text())
     print_eval(results)
@@ -323,18 +329,29 @@ def eval_(
     output: Annotated[Path | None, typer.Option("-o", "--output", help="write the figures as JSON")] = None,
 ) -> None:
     """Re-evaluate a saved run (deterministic episodes), or the scripted expert on a spec."""
-    from ..runner import evaluate_expert, evaluate_saved
+    from ..atomic import DiskFull
+    from ..atomic import write_text as write_atomic
+    from ..runner import EvaluationInterrupted, evaluate_expert, evaluate_saved
+    from .stops import stop_code
 
     if (run_dir is None) == (expert is None):
         err.print("give RUN_DIR, or --expert SPEC", markup=False)
         raise typer.Exit(code=2)
     try:
         results = evaluate_saved(run_dir, episodes) if run_dir else evaluate_expert(expert, (), episodes)
+    except EvaluationInterrupted as stop:
+        err.print(f"{stop.signal_name}: evaluation stopped; nothing was written", markup=False)
+        err.print(f"evaluate again with: fastrl eval {stop.run}", markup=False)
+        raise typer.Exit(code=stop_code(stop.signal_name)) from None
     except (SpecError, FileNotFoundError) as e:
         exit_with(e)
     print_eval(results)
     if output is not None:
-        write_text(output, json.dumps(results, indent=2))
+        try:
+            write_atomic(output, json.dumps(results, indent=2))
+        except (DiskFull, OSError) as e:
+            err.print(f"cannot write {output}: {e.strerror or e}", markup=False)
+            raise typer.Exit(code=1) from None
 
 
 @app.command()
@@ -415,4 +432,4 @@ def _duration(seconds: float | None) -> str:
 
 
 # commands in their own modules register themselves on `app`
-from . import cohort, poses, score, trainee  # noqa: E402,F401
+from . import cohort, poses, score, stops, trainee  # noqa: E402,F401

@@ -24,7 +24,7 @@ def experiment_and_report(
     spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool
 ) -> None:
     """Run (or continue) the spec's experiment and print its Table 3."""
-    from ..runner import RunInterrupted
+    from ..runner import RunInterrupted, RunOutOfSpace
     from ..runner.experiment import run_experiment, start_experiment
 
     try:
@@ -42,6 +42,10 @@ def experiment_and_report(
     except KeyboardInterrupt:
         err.print("interrupted; what is done is saved: continue with fastrl run --resume RUN_DIR", markup=False)
         raise typer.Exit(code=130) from None
+    except RunOutOfSpace as stop:
+        err.print(stop.sentence() + ".", markup=False)
+        err.print(f"continue with: fastrl run --resume {stop.run.parent}", markup=False)
+        raise typer.Exit(code=1) from None
     except (SpecError, FileNotFoundError) as e:
         exit_with(e)
     print_table3(json.loads((run_dir / "experiment.json").read_text()))

@@ -7,8 +7,6 @@ Loading needs only json and torch: the MLPs are evaluated with plain torch ops, 
 
 from __future__ import annotations
 
-import json
-import os
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -22,6 +20,7 @@ from stable_baselines3.common.torch_layers import FlattenExtractor
 from stable_baselines3.common.vec_env import VecEnv, unwrap_vec_normalize
 from torch import nn
 
+from ..atomic import atomic_write, write_json
 from .discriminator import Discriminator
 from .networks import FORMAT, Networks, file_sha256, load_networks  # noqa: F401  (loading beside saving)
 
@@ -192,19 +191,12 @@ def average_export(snapshots: list[dict[str, torch.Tensor]]) -> tuple[dict, dict
     return {"average": {"members": len(snapshots)}}, tensors
 
 
-def _atomic_write(path: Path, write) -> None:
-    """write(tmp) then replace path, so readers never see a half-written file."""
-    tmp = path.with_name(path.name + ".tmp")
-    write(tmp)
-    os.replace(tmp, path)
-
-
 def write_pair(out_dir: Path, name: str, meta: dict, tensors: dict[str, torch.Tensor]) -> list[Path]:
     """NAME.pt (tensors) then NAME.json (meta, with the .pt's file name and sha256)."""
     pt, js = out_dir / f"{name}.pt", out_dir / f"{name}.json"
-    _atomic_write(pt, lambda p: torch.save(tensors, p))
+    atomic_write(pt, lambda f: torch.save(tensors, f))
     meta = {"format": FORMAT, "network": name, **meta, "weights": pt.name, "sha256": file_sha256(pt)}
-    _atomic_write(js, lambda p: p.write_text(json.dumps(meta, indent=2)))
+    write_json(js, meta)
     return [pt, js]
 
 

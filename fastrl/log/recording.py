@@ -1,20 +1,28 @@
-"""RunRecorder: the one Rerun recording of a run, streamed to an .rrd file."""
+"""RunRecorder: the one Rerun recording of a run, streamed to an .rrd file; repair of a torn one."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import uuid
 from pathlib import Path
 from typing import Self
 
-import numpy as np
-import rerun as rr
+# A file sink that hits a full disk logs raw Rust lines to stderr; the runner reports that itself, in a sentence.
+# (Set before rerun is first imported; a RUST_LOG of the user's own wins.)
+os.environ.setdefault("RUST_LOG", "warn,re_log_encoding::rrd=off,re_sdk::recording_stream=off")
 
-from ..data.episode import EpisodeRecord
-from ..model.compiler import CompiledTask
-from .episode import log_episode
-from .layout import episode_name, run_blueprint
-from .metrics import TrainingCurves, summary_markdown
-from .scene import default_eye, log_scene
+import numpy as np  # noqa: E402
+import rerun as rr  # noqa: E402
+
+from ..atomic import DiskFull, free_bytes  # noqa: E402
+from ..data.episode import EpisodeRecord  # noqa: E402
+from ..model.compiler import CompiledTask  # noqa: E402
+from .episode import log_episode  # noqa: E402
+from .layout import episode_name, run_blueprint  # noqa: E402
+from .metrics import TrainingCurves, summary_markdown  # noqa: E402
+from .scene import default_eye, log_scene  # noqa: E402
 
 FLUSH_TICK_S = 5.0
 
@@ -95,13 +103,20 @@ class RunRecorder:
         blueprint = run_blueprint(n_episodes, eye=self.eye, irl=irl, curves=curves)
         self.rec.send_blueprint(blueprint, make_active=True, make_default=True)
 
+    def flush(self) -> None:
+        """Write everything logged so far to the file; DiskFull if the file could not be written."""
+        try:
+            self.rec.flush(timeout_sec=30.0)
+        except RuntimeError as e:  # the file writer died (on this SDK: only for want of space or a vanished disk)
+            raise DiskFull(self.path, None, free_bytes(self.path)) from e
+
     def close(self) -> None:
-        """Flush everything and close the file (idempotent)."""
+        """Flush everything and close the file (idempotent); DiskFull if it could not be written whole."""
         if self.closed:
             return
         self.closed = True
         try:
-            self.rec.flush(timeout_sec=30.0)
+            self.flush()
         finally:
             self.rec.disconnect()
 
@@ -112,3 +127,40 @@ class RunRecorder:
     def __exit__(self, *exc) -> None:
         """Close the recording."""
         self.close()
+
+
+def rerun_cli(*args: str, timeout: float = 300.0) -> subprocess.CompletedProcess:
+    """Run the `rerun` command line of the installed SDK (quietly, output captured)."""
+    env = {**os.environ, "CI": "1", "RUST_LOG": "error"}
+    return subprocess.run(
+        [sys.executable, "-m", "rerun", *args], capture_output=True, text=True, timeout=timeout, env=env
+    )
+
+
+def recording_problem(path: Path) -> str | None:
+    """Why `rerun rrd verify` rejects a recording (e.g. cut short by a kill or a full disk), or None if it is valid."""
+    res = rerun_cli("rrd", "verify", str(path))
+    if res.returncode == 0:
+        return None
+    lines = [line.strip() for line in (res.stderr + res.stdout).splitlines() if line.strip()]
+    return lines[0] if lines else f"rerun rrd verify exited with {res.returncode}"
+
+
+def repair_recording(path: Path) -> bool:
+    """Rewrite a torn recording from its complete chunks (`rerun rrd merge --continue-on-error`), in place.
+
+    Returns True if it was repaired, False if it was valid already. Raises ValueError if nothing in it can be
+    read, DiskFull if the repaired copy does not fit.
+    """
+    path = Path(path)
+    if recording_problem(path) is None:
+        return False
+    tmp = path.with_name(f".{path.name}.repair-{os.getpid()}.rrd")
+    res = rerun_cli("rrd", "merge", "--continue-on-error", str(path), "-o", str(tmp))
+    if res.returncode != 0 or not tmp.exists() or recording_problem(tmp) is not None:
+        tmp.unlink(missing_ok=True)
+        if "No space left" in res.stderr:
+            raise DiskFull(tmp, path.stat().st_size)
+        raise ValueError(f"{path}: no complete chunk could be read back ({res.stderr.strip()[-200:]})")
+    os.replace(tmp, path)
+    return True

@@ -1,5 +1,14 @@
 """Run stages: run directory, training with checkpoints, evaluation, recording."""
 
-from .run import EvaluationInterrupted, RunInterrupted, evaluate_expert, evaluate_saved, resume_run, start_run
+from .run import evaluate_expert, evaluate_saved, resume_run, start_run
+from .stops import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
 
-__all__ = ["EvaluationInterrupted", "RunInterrupted", "evaluate_expert", "evaluate_saved", "resume_run", "start_run"]
+__all__ = [
+    "EvaluationInterrupted",
+    "RunInterrupted",
+    "RunOutOfSpace",
+    "evaluate_expert",
+    "evaluate_saved",
+    "resume_run",
+    "start_run",
+]

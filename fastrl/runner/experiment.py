@@ -3,7 +3,6 @@ safety."""
 
 from __future__ import annotations
 
-import json
 import shutil
 import time
 from pathlib import Path
@@ -14,6 +13,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from scipy.stats import spearmanr
 
 from ..assess.scoring import Scorer, TrajectoryScores
+from ..atomic import write_json
 from ..data.cohort import make_cohort
 from ..data.trajectory import Trajectory, load_files
 from ..irl.networks import load_networks
@@ -23,6 +23,7 @@ from ..model.scope import joint_ranges
 from ..spec import load_spec
 from ..spec.models import TaskSpec
 from .rundir import latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
+from .stops import stop_on_sigterm
 
 METRICS = ("economy", "safety")
 LEARNED = ("reward", "value")
@@ -40,6 +41,7 @@ def start_experiment(
     return run_experiment(run, console or Console(), progress)
 
 
+@stop_on_sigterm()
 def run_experiment(run: Path, console: Console, progress: bool) -> Path:
     """Run (or continue, stage by stage) the experiment of a run directory: what is done is not redone."""
     spec = load_spec(run / "spec.yaml")
@@ -64,7 +66,7 @@ def run_experiment(run: Path, console: Console, progress: bool) -> Path:
         learned[algo] = _score_all(scorer, cohort, f"{algo} scores", console, progress)
         timings[f"score_{algo}"] = time.perf_counter() - t0
     result = experiment_result(spec, scored, learned, best, timings)
-    (run / "experiment.json").write_text(json.dumps(result, indent=2))
+    write_json(run / "experiment.json", result)
     plot_correlations(result, run / "table3.png")
     log_experiment(
         run / "recording.rrd", run.name, compile_task(spec), scored, learned, result, figure=run / "table3.png"

@@ -16,6 +16,8 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
 
 from ..agents.sb3 import save_checkpoint
+from ..atomic import append_line
+from .stops import check_space, tree_bytes
 
 
 class TrainingMonitor(BaseCallback):
@@ -152,8 +154,8 @@ class TrainingMonitor(BaseCallback):
                 m[f"loss/{key[6:]}"] = float(value)
         self.window = []
         self.logged = int(self.num_timesteps)
-        with (self.run / "metrics.jsonl").open("a") as f:
-            f.write(json.dumps({"timesteps": int(self.num_timesteps), **m}) + "\n")
+        check_space(self.run / "metrics.jsonl", 0)
+        append_line(self.run / "metrics.jsonl", json.dumps({"timesteps": int(self.num_timesteps), **m}))
         if self.recorder is not None:
             self.recorder.log_training(int(self.num_timesteps), m)
         status = f"success {m['episode/success_rate']:.0%}  subtasks {m['episode/subtasks']:.0%}" if eps else ""
@@ -161,14 +163,19 @@ class TrainingMonitor(BaseCallback):
         return m
 
     def checkpoint(self) -> Path:
-        """Save a checkpoint and keep only the newest few."""
+        """Save a checkpoint (if the disk has room for it and the reserve) and keep only the newest few."""
+        newest = sorted((self.run / "checkpoints").glob("[0-9]*"))
+        target = self.run / "checkpoints" / f"{self.num_timesteps:010d}"
+        check_space(target, tree_bytes(newest[-1]) if newest else 0)
         path = save_checkpoint(
-            self.run / "checkpoints" / f"{self.num_timesteps:010d}",
+            target,
             self.model,
             self.training_env,
             {"episodes": self.episodes},
             self.parts,
         )
+        if self.recorder is not None:  # the recording holds everything up to the checkpoint a resume starts from
+            self.recorder.flush()
         old = sorted((self.run / "checkpoints").glob("[0-9]*"))[: -self.keep]
         for p in old:
             shutil.rmtree(p, ignore_errors=True)

@@ -11,9 +11,11 @@ from rich.console import Console
 
 from ..agents.expert import ScriptedExpert
 from ..agents.sb3 import load_checkpoint, policy_function, save_checkpoint
+from ..atomic import DiskFull, write_json, write_text
 from ..env.fast_env import FastEnv
 from ..irl.export import save_networks
 from ..log import RunRecorder
+from ..log.recording import recording_problem, repair_recording
 from ..model.compiler import CompiledTask, compile_task
 from ..spec import load_spec
 from ..spec.models import TaskSpec
@@ -22,22 +24,17 @@ from .learner import build_learner
 from .monitor import TrainingMonitor
 from .rundir import latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
 from .saved import load_policy
+from .stops import (
+    EvaluationInterrupted,
+    RunInterrupted,
+    RunOutOfSpace,
+    shielded,
+    signal_name,
+    space_to_resume,
+    stop_on_sigterm,
+)
 
-
-class RunInterrupted(Exception):
-    """Training was stopped by the user; the run can be resumed."""
-
-    def __init__(self, run: Path, timesteps: int):
-        super().__init__(f"interrupted at {timesteps} timesteps")
-        self.run, self.timesteps = run, timesteps
-
-
-class EvaluationInterrupted(Exception):
-    """Evaluation was stopped by the user; the trained policy is saved in final/."""
-
-    def __init__(self, run: Path):
-        super().__init__("evaluation interrupted")
-        self.run = run
+__all__ = ["EvaluationInterrupted", "RunInterrupted", "RunOutOfSpace", "resume_run", "start_run"]
 
 
 def start_run(
@@ -56,40 +53,45 @@ def start_run(
     run = Path(into) if into is not None else new_run_dir(Path(root), spec)
     write_spec(run, spec, task.xml)
     write_meta(run, spec, str(spec_path), {"status": "training", "overrides": list(overrides)})
-    return _train_and_evaluate(run, spec, task, None, console or Console(), progress)
+    with stop_on_sigterm():
+        return _train_and_evaluate(run, spec, task, None, console or Console(), progress)
 
 
 def resume_run(run: Path, console: Console | None = None, progress: bool = True, timesteps: int | None = None) -> Path:
-    """Continue a run from its newest checkpoint to its budget (or a new one), then evaluate and record."""
+    """Continue a run from its newest whole checkpoint (from the start if it has none) to its budget, then
+    evaluate and record. Damaged checkpoints (a kill while writing) are named and passed over."""
     run = Path(run)
+    console = console or Console()
     if not (run / "spec.yaml").exists():
         raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
     spec = load_spec(run / "spec.yaml", [f"train.timesteps={timesteps}"] if timesteps else [])
     task = compile_task(spec)
     if timesteps:
         write_spec(run, spec, task.xml)
-    ckpt = latest_checkpoint(run)
+    skipped: list[str] = []
+    ckpt = latest_checkpoint(run, skipped)
+    for message in skipped:
+        console.print(f"skipped damaged checkpoint {message}", markup=False, highlight=False)
     if ckpt is None:
-        raise FileNotFoundError(f"{run} has no checkpoint to resume from")
-    return _train_and_evaluate(run, spec, task, ckpt, console or Console(), progress)
+        console.print(f"{run} has no whole checkpoint: training starts again from 0 timesteps", markup=False)
+    with stop_on_sigterm():
+        return _train_and_evaluate(run, spec, task, ckpt, console, progress, resuming=True)
 
 
-def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resuming: bool) -> RunRecorder:
-    """The run's recording; a resumed run keeps the old file aside and re-logs the curves so far."""
+def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resumed_at: int | None) -> RunRecorder:
+    """The run's recording; a resumed run keeps the old file aside (repaired if a kill tore it) and re-logs the
+    curves up to the checkpoint it resumes from."""
     path = run / "recording.rrd"
-    if resuming and path.exists():
+    if resumed_at is not None and path.exists():
         k = len(list(run.glob("recording.part*.rrd"))) + 1
-        path.rename(run / f"recording.part{k}.rrd")
+        part = path.rename(run / f"recording.part{k}.rrd")
+        repair_recording(part)
     recorder = RunRecorder(path, recording_id=run.name, run_name=f"{spec.name} {run.name}")
     recorder.log_scene(task)
     n = min(spec.evaluate.record_episodes, spec.evaluate.episodes)
     recorder.send_blueprint(n, spec.irl.enabled, curves=spec.irl.algorithm != "bc")  # BC logs no curves
-    if resuming:
-        history = (
-            [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines() if line.strip()]
-            if (run / "metrics.jsonl").exists()
-            else []
-        )
+    if resumed_at is not None:
+        history = metrics_until(run / "metrics.jsonl", resumed_at)
         if history:
             keys = sorted({k for row in history for k in row} - {"timesteps"})
             recorder.log_training_columns(
@@ -99,39 +101,112 @@ def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resuming: bool
     return recorder
 
 
+def metrics_until(path: Path, timesteps: int) -> list[dict]:
+    """The rows of metrics.jsonl up to `timesteps`, rewritten so (rows a kill left past the checkpoint, and a
+    line it tore, are dropped: training redoes them; the old recording keeps what was logged)."""
+    if not path.exists():
+        return []
+    rows = []
+    for line in path.read_text().splitlines():
+        try:
+            row = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(row, dict) and isinstance(row.get("timesteps"), int) and row["timesteps"] <= timesteps:
+            rows.append(row)
+    write_text(path, "".join(json.dumps(r) + "\n" for r in rows))
+    return rows
+
+
 def _train_and_evaluate(
-    run: Path, spec: TaskSpec, task: CompiledTask, ckpt: Path | None, console: Console, progress: bool
+    run: Path,
+    spec: TaskSpec,
+    task: CompiledTask,
+    ckpt: Path | None,
+    console: Console,
+    progress: bool,
+    resuming: bool = False,
 ) -> Path:
     """Train (from a checkpoint if given), save, evaluate agent and expert, write eval.json and the recording."""
-    learner = build_learner(spec, run, console, progress)
+    try:
+        learner = build_learner(spec, run, console, progress)
+    except KeyboardInterrupt as stop:  # while writing demonstrations: nothing trained yet
+        update_meta(run, status="interrupted", trained_timesteps=0)
+        raise RunInterrupted(run, 0, signal_name(stop)) from None
     model, venv = learner.model, learner.venv
     before = load_checkpoint(ckpt, model, venv, learner.parts) if ckpt else {}
-    recorder = _open_recorder(run, spec, task, resuming=ckpt is not None)
+    with shielded():
+        recorder = _open_recorder(run, spec, task, int(model.num_timesteps) if resuming else None)
     try:
-        ev = spec.evaluate
-        monitor = TrainingMonitor(
-            run,
-            list(spec.reward.features),
-            total=spec.train.timesteps,
-            log_every=spec.train.log_every,
-            checkpoint_every=spec.train.checkpoint_every,
-            recorder=recorder,
-            progress=progress,
-            keep_checkpoints=spec.train.keep_checkpoints,
-            stats=learner.stats,
-            parts=learner.parts,
-            evaluator=periodic_evaluator(spec, model, venv),
-            eval_every=ev.periodic_every,
-            stop_at=ev.stop_at_subtasks,
-        )
-        monitor.episodes = before.get("episodes", 0)
-        seconds = before.get("train_seconds", 0.0)
-        remaining = spec.train.timesteps - model.num_timesteps
-        t0 = time.perf_counter()
+        _stages(run, spec, learner, before, recorder, console, progress)
+    except DiskFull as full:
+        raise _out_of_space(run, full, recorder) from None
+    except KeyboardInterrupt as stop:  # between stages (saving the final checkpoint or the networks)
+        _close(run, recorder)
+        ckpt = latest_checkpoint(run)
+        done = json.loads((ckpt / "state.json").read_text())["timesteps"] if ckpt else 0
+        raise RunInterrupted(run, done, signal_name(stop)) from None
+    except BaseException:
+        _close(run, recorder)
+        raise
+    _close(run, recorder)
+    return run
+
+
+def _close(run: Path, recorder: RunRecorder) -> None:
+    """Close the recording, held from signals; a full disk becomes RunOutOfSpace."""
+    with shielded():
         try:
-            if remaining > 0:
-                learner.learn(remaining, monitor)
-        except KeyboardInterrupt:
+            recorder.close()
+        except DiskFull as full:
+            raise _out_of_space(run, full, recorder) from None
+
+
+def _out_of_space(run: Path, full: DiskFull, recorder: RunRecorder) -> RunOutOfSpace:
+    """Close what can be closed on a full disk; the stop to report, with the space a resume needs."""
+    with shielded():
+        try:
+            recorder.close()
+        except DiskFull:
+            pass
+        try:
+            update_meta(run, status="stopped: disk full")
+        except OSError:
+            pass
+        whole = recording_problem(recorder.path) is None
+    return RunOutOfSpace(run, full, space_to_resume(run), whole)
+
+
+def _stages(
+    run: Path, spec: TaskSpec, learner, before: dict, recorder: RunRecorder, console: Console, progress: bool
+) -> None:
+    """Train to the budget (checkpointing; Ctrl-C or SIGTERM saves one and stops), save, evaluate, write eval.json."""
+    model, venv = learner.model, learner.venv
+    ev = spec.evaluate
+    monitor = TrainingMonitor(
+        run,
+        list(spec.reward.features),
+        total=spec.train.timesteps,
+        log_every=spec.train.log_every,
+        checkpoint_every=spec.train.checkpoint_every,
+        recorder=recorder,
+        progress=progress,
+        keep_checkpoints=spec.train.keep_checkpoints,
+        stats=learner.stats,
+        parts=learner.parts,
+        evaluator=periodic_evaluator(spec, model, venv),
+        eval_every=ev.periodic_every,
+        stop_at=ev.stop_at_subtasks,
+    )
+    monitor.episodes = before.get("episodes", 0)
+    seconds = before.get("train_seconds", 0.0)
+    remaining = spec.train.timesteps - model.num_timesteps
+    t0 = time.perf_counter()
+    try:
+        if remaining > 0:
+            learner.learn(remaining, monitor)
+    except KeyboardInterrupt as stop:
+        with shielded():
             monitor.progress.stop()
             seconds += time.perf_counter() - t0
             save_checkpoint(
@@ -142,31 +217,30 @@ def _train_and_evaluate(
                 learner.parts,
             )
             update_meta(run, status="interrupted", trained_timesteps=int(model.num_timesteps), train_seconds=seconds)
-            raise RunInterrupted(run, int(model.num_timesteps)) from None
-        seconds += time.perf_counter() - t0
-        state = {"episodes": monitor.episodes, "train_seconds": seconds, "stopped_early": monitor.stopped_early}
-        save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state, learner.parts)
-        save_checkpoint(run / "final", model, venv, state, learner.parts)
-        save_networks(run / "networks", model, venv, learner.disc, spec.train.params().gamma, learner.snapshots)
-        update_meta(
-            run,
-            status="evaluating",
-            trained_timesteps=int(model.num_timesteps),
-            train_seconds=seconds,
-            train_fps=model.num_timesteps / max(seconds, 1e-9),
-            stopped_early=monitor.stopped_early,
-        )
-        try:
-            results = evaluate_run(spec, policy_function(model, venv), recorder, console)
-        except KeyboardInterrupt:
+        raise RunInterrupted(run, int(model.num_timesteps), signal_name(stop)) from None
+    seconds += time.perf_counter() - t0
+    state = {"episodes": monitor.episodes, "train_seconds": seconds, "stopped_early": monitor.stopped_early}
+    save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state, learner.parts)
+    save_checkpoint(run / "final", model, venv, state, learner.parts)
+    save_networks(run / "networks", model, venv, learner.disc, spec.train.params().gamma, learner.snapshots)
+    update_meta(
+        run,
+        status="evaluating",
+        trained_timesteps=int(model.num_timesteps),
+        train_seconds=seconds,
+        train_fps=model.num_timesteps / max(seconds, 1e-9),
+        stopped_early=monitor.stopped_early,
+    )
+    try:
+        results = evaluate_run(spec, policy_function(model, venv), recorder, console)
+    except KeyboardInterrupt as stop:
+        with shielded():
             update_meta(run, status="trained, evaluation interrupted")
-            raise EvaluationInterrupted(run) from None
-        (run / "eval.json").write_text(json.dumps(results, indent=2))
-        recorder.log_summary(results["agent"])
-        update_meta(run, status="done", eval_seconds=results["eval_seconds"])
-    finally:
-        recorder.close()
-    return run
+        raise EvaluationInterrupted(run, signal_name(stop)) from None
+    write_json(run / "eval.json", results)
+    recorder.log_summary(results["agent"])
+    recorder.flush()
+    update_meta(run, status="done", eval_seconds=results["eval_seconds"])
 
 
 def periodic_evaluator(spec: TaskSpec, model, venv):
@@ -211,11 +285,15 @@ def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: 
 
 
 def evaluate_saved(run: Path, episodes: int | None = None) -> dict:
-    """Re-evaluate a saved run's policy without touching its recording."""
-    spec, policy = load_policy(run)
-    if episodes:
-        spec = spec.model_copy(update={"evaluate": spec.evaluate.model_copy(update={"episodes": episodes})})
-    return evaluate_run(spec, policy, None, None)
+    """Re-evaluate a saved run's policy without touching its recording (Ctrl-C or SIGTERM: EvaluationInterrupted)."""
+    with stop_on_sigterm():
+        try:
+            spec, policy = load_policy(run)
+            if episodes:
+                spec = spec.model_copy(update={"evaluate": spec.evaluate.model_copy(update={"episodes": episodes})})
+            return evaluate_run(spec, policy, None, None)
+        except KeyboardInterrupt as stop:
+            raise EvaluationInterrupted(Path(run), signal_name(stop)) from None
 
 
 def evaluate_expert(spec_path, overrides=(), episodes: int | None = None) -> dict:

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import yaml
 
+from ..agents.sb3 import checkpoint_problem
+from ..atomic import write_json, write_text
 from ..spec import spec_hash
 from ..spec.models import TaskSpec
 
@@ -39,8 +41,8 @@ def new_run_dir(root: Path, spec: TaskSpec, label: str | None = None) -> Path:
 def write_spec(run: Path, spec: TaskSpec, xml: str) -> None:
     """Write the resolved spec (YAML) and the compiled MJCF."""
     text = yaml.safe_dump(spec.model_dump(mode="json"), sort_keys=False, default_flow_style=None, width=100)
-    (run / "spec.yaml").write_text(f"# resolved spec of this run (hash {spec_hash(spec)})\n{text}")
-    (run / "model.xml").write_text(xml)
+    write_text(run / "spec.yaml", f"# resolved spec of this run (hash {spec_hash(spec)})\n{text}")
+    write_text(run / "model.xml", xml)
 
 
 def git_commit() -> str | None:
@@ -85,7 +87,7 @@ def write_meta(run: Path, spec: TaskSpec, source: str, extra: dict | None = None
         "started_utc": datetime.now(UTC).isoformat(timespec="seconds"),
         **(extra or {}),
     }
-    (run / "meta.json").write_text(json.dumps(meta, indent=2))
+    write_json(run / "meta.json", meta)
     return meta
 
 
@@ -94,13 +96,19 @@ def update_meta(run: Path, **fields) -> None:
     path = run / "meta.json"
     meta = json.loads(path.read_text()) if path.exists() else {}
     meta.update(fields)
-    path.write_text(json.dumps(meta, indent=2))
+    write_json(path, meta)
 
 
-def latest_checkpoint(run: Path) -> Path | None:
-    """The checkpoint with the most timesteps, or None."""
-    found = [p for p in (run / "checkpoints").glob("*") if (p / "state.json").exists() and (p / "weights.pt").exists()]
-    return max(found, key=lambda p: json.loads((p / "state.json").read_text())["timesteps"], default=None)
+def latest_checkpoint(run: Path, skipped: list[str] | None = None) -> Path | None:
+    """The whole checkpoint with the most timesteps, or None; damaged ones are named in `skipped` and passed over."""
+    found = sorted((run / "checkpoints").glob("[0-9]*"), key=lambda p: p.name, reverse=True)
+    for path in found:
+        problem = checkpoint_problem(path)
+        if problem is None:
+            return path
+        if skipped is not None:
+            skipped.append(f"{path}: {problem}")
+    return None
 
 
 def list_runs(root: Path) -> list[dict]:

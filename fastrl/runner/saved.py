@@ -5,7 +5,7 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-from ..agents.sb3 import build_model, load_checkpoint, make_vec_env, policy_function
+from ..agents.sb3 import build_model, checkpoint_problem, load_checkpoint, make_vec_env, policy_function
 from ..spec import load_spec
 from ..spec.models import TaskSpec
 from .rundir import latest_checkpoint
@@ -17,7 +17,7 @@ def load_policy(run: Path) -> tuple[TaskSpec, object]:
     if not (run / "spec.yaml").exists():
         raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
     spec = load_spec(run / "spec.yaml")
-    weights = run / "final" if (run / "final" / "weights.pt").exists() else latest_checkpoint(run)
+    weights = run / "final" if checkpoint_problem(run / "final") is None else latest_checkpoint(run)
     if weights is None:
         raise FileNotFoundError(f"{run} has no saved policy")
     return spec, checkpoint_policy(spec, weights)

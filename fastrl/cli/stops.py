@@ -1,0 +1,55 @@
+"""Stops on the command line: exit codes and messages for signals and a full disk; `fastrl repair RUN_DIR`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+
+from . import app, err, out
+
+
+def stop_code(signal_name: str) -> int:
+    """The shell's exit status for a stop by a signal: 128 + its number (130 Ctrl-C, 143 SIGTERM)."""
+    return 143 if signal_name == "SIGTERM" else 130
+
+
+def report_out_of_space(stop) -> None:
+    """Say in plain sentences that the disk filled, what the recording holds and how to go on; exit 1."""
+    err.print(stop.sentence() + ".", markup=False)
+    if stop.recording_whole:
+        err.print(f"the recording {stop.run}/recording.rrd is valid up to its last complete chunk", markup=False)
+    else:
+        err.print(
+            f"the recording {stop.run}/recording.rrd was cut short; resuming (or: fastrl repair {stop.run}) "
+            "rewrites it from its complete chunks",
+            markup=False,
+        )
+    err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
+    raise typer.Exit(code=1)
+
+
+@app.command()
+def repair(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR", show_default=False)]) -> None:
+    """Rewrite recordings cut short by a kill or a full disk from their complete chunks; name bad checkpoints."""
+    from ..atomic import DiskFull
+    from ..log.recording import repair_recording
+    from ..runner.rundir import latest_checkpoint
+
+    if not (run_dir / "spec.yaml").exists():
+        err.print(f"{run_dir} is not a run directory (no spec.yaml)", markup=False)
+        raise typer.Exit(code=2)
+    for rrd in sorted(run_dir.glob("recording*.rrd")):
+        try:
+            fixed = repair_recording(rrd)
+        except (DiskFull, ValueError) as e:
+            err.print(str(e), markup=False)
+            raise typer.Exit(code=1) from None
+        out.print(f"{'repaired' if fixed else 'valid'}  {escape(str(rrd))}")
+    skipped: list[str] = []
+    ckpt = latest_checkpoint(run_dir, skipped)
+    for message in skipped:
+        out.print(f"damaged checkpoint (resume passes over it): {escape(message)}")
+    out.print(f"resume from: {escape(str(ckpt))}" if ckpt else "no whole checkpoint: resume starts from 0 timesteps")
