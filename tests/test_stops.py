@@ -50,10 +50,10 @@ def sets(extra=()) -> list[str]:
     return [a for kv in [*TINY, *extra] for a in ("--set", kv)]
 
 
-def start(args: list[str], cwd: Path) -> subprocess.Popen:
-    """The real command line in a subprocess (SIGINT at its default, as in a terminal)."""
+def start(args: list[str], cwd: Path, quiet: bool = True) -> subprocess.Popen:
+    """The real command line in a subprocess (SIGINT at its default, as in a terminal; no progress bar if quiet)."""
     return subprocess.Popen(
-        [sys.executable, "-m", "fastrl.cli", *args, "--no-progress"],
+        [sys.executable, "-m", "fastrl.cli", *args, *(["--no-progress"] if quiet else [])],
         cwd=cwd,
         env={**os.environ, "CI": "1", "MUJOCO_GL": "egl"},
         stdout=subprocess.PIPE,
@@ -252,6 +252,24 @@ def test_a_damaged_newest_checkpoint_is_reported_and_resume_falls_back(tmp_path)
     assert f"skipped damaged checkpoint {newest}: weights.pt is damaged" in res.output
     res = CliRunner().invoke(app, ["repair", str(run)])
     assert res.exit_code == 0 and "valid" in res.output, res.output
+
+    # `fastrl eval` of the run, stopped by SIGTERM once it is well into its episodes: a plain stop, nothing written
+    proc = start(["eval", str(run), "--episodes", "200", "-o", str(run / "again.json")], run, quiet=False)
+    wait_until(lambda: cpu_seconds(proc.pid) > 5.0, proc)
+    proc.terminate()
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143 and "Traceback" not in err, err
+    assert err.splitlines() == [
+        "SIGTERM: evaluation stopped; nothing was written",
+        f"evaluate again with: fastrl eval {run}",
+    ]
+    assert not (run / "again.json").exists()
+
+
+def cpu_seconds(pid: int) -> float:
+    """CPU time a process has used so far (user + system), from /proc."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def test_atomic_writes_leave_the_old_file_when_writing_fails(tmp_path):

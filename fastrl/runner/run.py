@@ -11,7 +11,7 @@ from rich.console import Console
 
 from ..agents.expert import ScriptedExpert
 from ..agents.sb3 import load_checkpoint, policy_function, save_checkpoint
-from ..atomic import DiskFull, write_json, write_text
+from ..atomic import DiskFull, is_disk_full, write_json, write_text
 from ..env.fast_env import FastEnv
 from ..irl.export import save_networks
 from ..log import RunRecorder
@@ -22,12 +22,13 @@ from ..spec.models import TaskSpec
 from .evaluate import evaluate
 from .learner import build_learner
 from .monitor import TrainingMonitor
-from .rundir import latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
+from .rundir import clean_leftovers, latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
 from .saved import load_policy
 from .stops import (
     EvaluationInterrupted,
     RunInterrupted,
     RunOutOfSpace,
+    check_space,
     shielded,
     signal_name,
     space_to_resume,
@@ -68,6 +69,7 @@ def resume_run(run: Path, console: Console | None = None, progress: bool = True,
     task = compile_task(spec)
     if timesteps:
         write_spec(run, spec, task.xml)
+    clean_leftovers(run)
     skipped: list[str] = []
     ckpt = latest_checkpoint(run, skipped)
     for message in skipped:
@@ -130,13 +132,20 @@ def _train_and_evaluate(
     """Train (from a checkpoint if given), save, evaluate agent and expert, write eval.json and the recording."""
     try:
         learner = build_learner(spec, run, console, progress)
-    except KeyboardInterrupt as stop:  # while writing demonstrations: nothing trained yet
-        update_meta(run, status="interrupted", trained_timesteps=0)
-        raise RunInterrupted(run, 0, signal_name(stop)) from None
-    model, venv = learner.model, learner.venv
-    before = load_checkpoint(ckpt, model, venv, learner.parts) if ckpt else {}
-    with shielded():
-        recorder = _open_recorder(run, spec, task, int(model.num_timesteps) if resuming else None)
+        before = load_checkpoint(ckpt, learner.model, learner.venv, learner.parts) if ckpt else {}
+        recorder = _open_recorder(run, spec, task, int(learner.model.num_timesteps) if resuming else None)
+    except KeyboardInterrupt as stop:  # before training: writing demonstrations, repairing the old recording
+        with shielded():
+            update_meta(run, status="interrupted")
+        done = int(json.loads((ckpt / "state.json").read_text())["timesteps"]) if ckpt else 0
+        raise RunInterrupted(run, done, signal_name(stop)) from None
+    except OSError as e:
+        if not is_disk_full(e):
+            raise
+        full = e if isinstance(e, DiskFull) else DiskFull(Path(e.filename or run))
+        rrd = run / "recording.rrd"
+        whole = not rrd.exists() or recording_problem(rrd) is None
+        raise RunOutOfSpace(run, full, space_to_resume(run), whole) from None
     try:
         _stages(run, spec, learner, before, recorder, console, progress)
     except DiskFull as full:
@@ -205,6 +214,9 @@ def _stages(
     try:
         if remaining > 0:
             learner.learn(remaining, monitor)
+    except DiskFull:
+        monitor.progress.stop()
+        raise
     except KeyboardInterrupt as stop:
         with shielded():
             monitor.progress.stop()
@@ -231,6 +243,7 @@ def _stages(
         train_fps=model.num_timesteps / max(seconds, 1e-9),
         stopped_early=monitor.stopped_early,
     )
+    check_space(recorder.path, 0)  # the reserve, before episodes stream into the recording
     try:
         results = evaluate_run(spec, policy_function(model, venv), recorder, console)
     except KeyboardInterrupt as stop:

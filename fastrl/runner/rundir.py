@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import platform
+import shutil
 import subprocess
 import sys
 from datetime import UTC, datetime
@@ -109,6 +110,22 @@ def latest_checkpoint(run: Path, skipped: list[str] | None = None) -> Path | Non
         if skipped is not None:
             skipped.append(f"{path}: {problem}")
     return None
+
+
+def clean_leftovers(run: Path) -> list[Path]:
+    """Remove the hidden temporary files and directories a kill left mid-write (they are never read); return them."""
+    found = [
+        p
+        for folder in (run, run / "checkpoints", run / "networks")
+        for p in folder.glob(".*")
+        if any(tag in p.name for tag in (".tmp-", ".old-", ".repair-"))
+    ]
+    for p in found:
+        if p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
+    return found
 
 
 def list_runs(root: Path) -> list[dict]:
