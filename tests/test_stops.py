@@ -184,6 +184,10 @@ def test_sigint_sigterm_and_sigkill_each_leave_a_resumable_run_and_a_valid_recor
     before = [r for r in rows if r["timesteps"] <= kept]
     assert before and before[-1]["timesteps"] > (0 if stage == "evaluation" else reached)
     assert "footer" in recording_problem(run / "recording.rrd")  # the kill left it without its end
+    if stage == "evaluation":  # the documented repair step (elsewhere, --resume repairs it by itself)
+        res = CliRunner().invoke(app, ["repair", str(run)])
+        assert res.exit_code == 0 and f"repaired  {run / 'recording.rrd'}" in res.output, res.output
+        verify(run / "recording.rrd")
 
     final = resume(run, None if stage == "evaluation" else 256)
     assert final >= kept
