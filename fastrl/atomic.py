@@ -21,6 +21,10 @@ class DiskFull(OSError):
         self.free = free if free is not None else free_bytes(path)
         super().__init__(errno.ENOSPC, self.sentence())
 
+    def __str__(self) -> str:
+        """The sentence, without OSError's [Errno 28] prefix."""
+        return self.sentence()
+
     def sentence(self) -> str:
         """One plain sentence naming the path, the space needed and the space free."""
         want = f"about {megabytes(self.needed)}" if self.needed else "more space"

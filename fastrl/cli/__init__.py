@@ -256,6 +256,7 @@ def train_and_report(
 ) -> None:
     """Start (or resume) a run, turn interruptions and bad input into messages, print the evaluation."""
     from ..agents.sb3 import CheckpointDamaged, CheckpointMismatch
+    from ..atomic import DiskFull
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace, resume_run, start_run
     from .stops import report_out_of_space, stop_code
 
@@ -287,6 +288,9 @@ def train_and_report(
         raise typer.Exit(code=stop_code(stop.signal_name)) from None
     except RunOutOfSpace as stop:
         report_out_of_space(stop)
+    except DiskFull as e:  # before the run started (its spec, metadata)
+        err.print(f"{e}.", markup=False)
+        raise typer.Exit(code=1) from None
     except (SpecError, FileNotFoundError, CheckpointMismatch, CheckpointDamaged) as e:
         exit_with(e)
     results = json.loads((run_dir / "eval.json").read_text())
@@ -329,8 +333,6 @@ def eval_(
     output: Annotated[Path | None, typer.Option("-o", "--output", help="write the figures as JSON")] = None,
 ) -> None:
     """Re-evaluate a saved run (deterministic episodes), or the scripted expert on a spec."""
-    from ..atomic import DiskFull
-    from ..atomic import write_text as write_atomic
     from ..runner import EvaluationInterrupted, evaluate_expert, evaluate_saved
     from .stops import stop_code
 
@@ -347,11 +349,7 @@ def eval_(
         exit_with(e)
     print_eval(results)
     if output is not None:
-        try:
-            write_atomic(output, json.dumps(results, indent=2))
-        except (DiskFull, OSError) as e:
-            err.print(f"cannot write {output}: {e.strerror or e}", markup=False)
-            raise typer.Exit(code=1) from None
+        write_text(output, json.dumps(results, indent=2))
 
 
 @app.command()
