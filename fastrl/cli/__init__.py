@@ -258,7 +258,7 @@ def train_and_report(
     from ..agents.sb3 import CheckpointDamaged, CheckpointMismatch
     from ..atomic import DiskFull
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace, resume_run, start_run
-    from .stops import report_out_of_space, stop_code
+    from .stops import report_stop
 
     try:
         if resume is not None:
@@ -273,24 +273,8 @@ def train_and_report(
 
                 return experiment_and_report(spec, overrides, None, runs, progress)
             run_dir = start_run(spec, overrides, runs, out, progress)
-    except RunInterrupted as stop:
-        err.print(
-            f"{stop.signal_name}: stopped at {stop.timesteps} timesteps; checkpoint and recording saved in {stop.run}",
-            markup=False,
-        )
-        err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
-        raise typer.Exit(code=stop_code(stop.signal_name)) from None
-    except EvaluationInterrupted as stop:
-        err.print(
-            f"{stop.signal_name}: evaluation stopped; the trained policy is saved in {stop.run}/final", markup=False
-        )
-        err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
-        raise typer.Exit(code=stop_code(stop.signal_name)) from None
-    except RunOutOfSpace as stop:
-        report_out_of_space(stop)
-    except DiskFull as e:  # before the run started (its spec, metadata)
-        err.print(f"{e}.", markup=False)
-        raise typer.Exit(code=1) from None
+    except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
+        report_stop(stop)
     except (SpecError, FileNotFoundError, CheckpointMismatch, CheckpointDamaged) as e:
         exit_with(e)
     results = json.loads((run_dir / "eval.json").read_text())

@@ -16,6 +16,25 @@ def stop_code(signal_name: str) -> int:
     return 143 if signal_name == "SIGTERM" else 130
 
 
+def report_stop(stop: Exception) -> None:
+    """A stopped run in plain lines, the last one how to resume it; exit 128 + the signal, or 1 for a full disk."""
+    from ..atomic import DiskFull
+    from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
+
+    if isinstance(stop, RunOutOfSpace):
+        report_out_of_space(stop)
+    if isinstance(stop, DiskFull):  # before the run started (its spec, its metadata)
+        err.print(f"{stop}.", markup=False)
+        raise typer.Exit(code=1)
+    if isinstance(stop, RunInterrupted):
+        saved = f"stopped at {stop.timesteps} timesteps; checkpoint and recording saved in {stop.run}"
+    elif isinstance(stop, EvaluationInterrupted):
+        saved = f"evaluation stopped; the trained policy is saved in {stop.run}/final"
+    err.print(f"{stop.signal_name}: {saved}", markup=False)
+    err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
+    raise typer.Exit(code=stop_code(stop.signal_name))
+
+
 def report_out_of_space(stop) -> None:
     """Say in plain sentences that the disk filled, what the recording holds and how to go on; exit 1."""
     err.print(stop.sentence() + ".", markup=False)
