@@ -32,8 +32,10 @@ class DiskFull(OSError):
 
 
 def megabytes(n: int | None) -> str:
-    """A byte count as a short human figure."""
-    return "? MB" if n is None else f"{n / 1e6:.1f} MB"
+    """A byte count as a short human figure (MB, or kB below one MB)."""
+    if n is None:
+        return "? MB"
+    return f"{n / 1e6:.1f} MB" if n >= 1e6 or n == 0 else f"{max(1, round(n / 1e3))} kB"
 
 
 def free_bytes(path: Path) -> int | None:

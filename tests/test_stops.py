@@ -55,7 +55,7 @@ def start(args: list[str], cwd: Path, quiet: bool = True) -> subprocess.Popen:
     return subprocess.Popen(
         [sys.executable, "-m", "fastrl.cli", *args, *(["--no-progress"] if quiet else [])],
         cwd=cwd,
-        env={**os.environ, "CI": "1", "MUJOCO_GL": "egl"},
+        env={**os.environ, "CI": "1", "MUJOCO_GL": "egl", "PYTHONFAULTHANDLER": "1"},
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -324,7 +324,11 @@ def fill(disk: Path, leave: int) -> Path:
 
 def stopped_for_space(proc: subprocess.Popen, run: Path) -> str:
     """Wait for the stop on a full disk and check its message: plain sentences, no traceback or Rerun log line."""
-    _, err = proc.communicate(timeout=120)
+    try:
+        _, err = proc.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGABRT)  # faulthandler prints where every thread is
+        pytest.fail(f"no stop within 120 s on a full disk: {proc.communicate()[1][-3000:]}")
     assert proc.returncode == 1, err
     lines = err.strip().splitlines()
     assert "Traceback" not in err and "ERROR" not in err and "re_" not in err, err

@@ -167,6 +167,8 @@ class TrainingMonitor(BaseCallback):
         newest = sorted((self.run / "checkpoints").glob("[0-9]*"))
         target = self.run / "checkpoints" / f"{self.num_timesteps:010d}"
         check_space(target, tree_bytes(newest[-1]) if newest else 0)
+        if self.recorder is not None:  # first, so the recording holds all a resume from this checkpoint redoes
+            self.recorder.flush()
         path = save_checkpoint(
             target,
             self.model,
@@ -174,8 +176,6 @@ class TrainingMonitor(BaseCallback):
             {"episodes": self.episodes},
             self.parts,
         )
-        if self.recorder is not None:  # the recording holds everything up to the checkpoint a resume starts from
-            self.recorder.flush()
         old = sorted((self.run / "checkpoints").glob("[0-9]*"))[: -self.keep]
         for p in old:
             shutil.rmtree(p, ignore_errors=True)
