@@ -34,7 +34,7 @@ TINY = [
     "evaluate.image_every=10",
     "episode.time_limit=8",
 ]
-IRL = ["irl.demonstrations.expert=2", "irl.discriminator.batch_size=64", "evaluate.image_every=0"]
+IRL = ["irl.demonstrations.expert=2", "evaluate.image_every=0"]
 LONG_EVAL = ["evaluate.episodes=3", "evaluate.record_episodes=3", "evaluate.image_every=3"]
 SPEC = str(spec_file("tracelines"))
 STAGES = {
