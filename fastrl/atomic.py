@@ -75,10 +75,7 @@ def fsync_dir(path: Path) -> None:
 
 
 def atomic_write(path: Path, write: Callable[[IO[bytes]], None], needed: int | None = None) -> Path:
-    """Call write(f) on a temporary file beside `path`, fsync it and rename it over `path`.
-
-    A kill at any moment leaves either the old file or the new one; a full disk raises DiskFull and leaves the old.
-    """
+    """write(f) to a temporary file beside `path`, fsync, rename over `path`: a kill leaves the old file or the new."""
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     try:
@@ -108,10 +105,7 @@ def write_json(path: Path, obj) -> Path:
 
 
 def append_line(path: Path, line: str) -> None:
-    """Append one line to a log (e.g. metrics.jsonl) and fsync it; a full disk raises DiskFull.
-
-    A kill mid-append can leave a torn last line: readers skip lines that do not parse.
-    """
+    """Append one line to a log (metrics.jsonl) and fsync it; a kill may tear it, so readers skip bad lines."""
     data = (line.rstrip("\n") + "\n").encode("utf-8")
     try:
         with open(path, "ab") as f:

@@ -147,11 +147,7 @@ def recording_problem(path: Path) -> str | None:
 
 
 def repair_recording(path: Path) -> bool:
-    """Rewrite a torn recording from its complete chunks (`rerun rrd merge --continue-on-error`), in place.
-
-    Returns True if it was repaired, False if it was valid already. Raises ValueError if nothing in it can be
-    read, DiskFull if the repaired copy does not fit.
-    """
+    """Rewrite a torn recording in place from its complete chunks; False if it was valid (ValueError: unreadable)."""
     path = Path(path)
     if recording_problem(path) is None:
         return False

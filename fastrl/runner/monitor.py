@@ -167,7 +167,7 @@ class TrainingMonitor(BaseCallback):
         newest = sorted((self.run / "checkpoints").glob("[0-9]*"))
         target = self.run / "checkpoints" / f"{self.num_timesteps:010d}"
         check_space(target, tree_bytes(newest[-1]) if newest else 0)
-        if self.recorder is not None:  # first, so the recording holds all a resume from this checkpoint redoes
+        if self.recorder is not None:  # before the checkpoint exists, the recording holds all logged up to it
             self.recorder.flush()
         path = save_checkpoint(
             target,

@@ -59,8 +59,7 @@ def start_run(
 
 
 def resume_run(run: Path, console: Console | None = None, progress: bool = True, timesteps: int | None = None) -> Path:
-    """Continue a run from its newest whole checkpoint (from the start if it has none) to its budget, then
-    evaluate and record. Damaged checkpoints (a kill while writing) are named and passed over."""
+    """Continue a run from its newest whole checkpoint (naming damaged ones) to its budget; evaluate and record."""
     run = Path(run)
     console = console or Console()
     if not (run / "spec.yaml").exists():
@@ -81,8 +80,7 @@ def resume_run(run: Path, console: Console | None = None, progress: bool = True,
 
 
 def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resumed_at: int | None) -> RunRecorder:
-    """The run's recording; a resumed run keeps the old file aside (repaired if a kill tore it) and re-logs the
-    curves up to the checkpoint it resumes from."""
+    """The run's recording; resuming, the old one is kept aside (repaired) and the curves up to it re-logged."""
     path = run / "recording.rrd"
     if resumed_at is not None and path.exists():
         k = len(list(run.glob("recording.part*.rrd"))) + 1
@@ -104,8 +102,7 @@ def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resumed_at: in
 
 
 def metrics_until(path: Path, timesteps: int) -> list[dict]:
-    """The rows of metrics.jsonl up to `timesteps`, rewritten so (rows a kill left past the checkpoint, and a
-    line it tore, are dropped: training redoes them; the old recording keeps what was logged)."""
+    """metrics.jsonl cut back to the rows up to `timesteps` (torn lines dropped), as a resume redoes the rest."""
     if not path.exists():
         return []
     rows = []
