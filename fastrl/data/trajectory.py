@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_write
 from ..spec.limits import MAX_TRAJECTORY_BYTES, open_regular
 from .checks import COORDINATES, meta_problem, npz_members, parse_meta, range_problem, real_array, time_problem
 
@@ -72,14 +73,13 @@ class Trajectory:
         return range_problem(self.time, self.portal, np.asarray(ranges, float))
 
     def save(self, path: Path) -> Path:
-        """Write the .npz (meta as a JSON string)."""
+        """Write the .npz (meta as a JSON string) atomically: a kill leaves the old file or the new one."""
         arrays = {"time": self.time, "portal": self.portal, "meta": np.array(json.dumps(self.meta))}
         if self.actions is not None:
             arrays["actions"] = np.asarray(self.actions)
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        np.savez_compressed(path, **arrays)
-        return path
+        return atomic_write(path, lambda f: np.savez_compressed(f, **arrays))
 
     @classmethod
     def load(cls, path: Path) -> Trajectory:
