@@ -42,12 +42,20 @@ def noisy_expert_rollout(
 
 
 class RankedRollouts:
-    """Noisy-expert rollouts padded to one length, their noise rates, and the ranking loss of r_psi on them."""
+    """Noisy rollouts of the scripted expert (or `actor`) padded to one length, their noise, r_psi's ranking loss."""
 
     def __init__(
-        self, env, noise: list[float], episodes: int, *, seed: int = 50000, snippet: int = 50, repeat: int = 1
+        self,
+        env,
+        noise: list[float],
+        episodes: int,
+        *,
+        seed: int = 50000,
+        snippet: int = 50,
+        repeat: int = 1,
+        actor=None,
     ):
-        expert = ScriptedExpert(env)
+        expert = ScriptedExpert(env) if actor is None else actor  # actor: act(obs) and reset(), e.g. a cloned policy
         runs = [
             noisy_expert_rollout(env, expert, eps, seed + 1000 * i + k, repeat)
             for i, eps in enumerate(noise)

@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 from rich.console import Console
 from rich.markup import escape
 from stable_baselines3.common.base_class import BaseAlgorithm
@@ -14,8 +13,9 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from ..agents.bc import behaviour_clone
 from ..agents.sb3 import build_model, make_vec_env
+from ..data.recordings import load_recordings, with_actions
 from ..data.replay import demonstration_pairs
-from ..data.trajectory import Trajectory, load_trajectories
+from ..data.trajectory import Trajectory
 from ..env.fast_env import FastEnv
 from ..irl import AdversarialCallback, Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
 from ..irl.averaging import RewardAveraging
@@ -23,6 +23,7 @@ from ..irl.demonstrations import expert_transitions
 from ..irl.ranking import RankedRollouts
 from ..model.scope import joint_ranges
 from ..spec.models import TaskSpec
+from .cloned import cloned_actor
 from .demos import write_demos
 
 
@@ -84,33 +85,15 @@ def demonstrations(spec: TaskSpec, run: Path, console: Console, progress: bool) 
         folder = run / "demos"
         if len(list(folder.glob("*.npz"))) < cfg.expert:
             write_demos(folder, cfg.expert, cfg.seed, expert_spec=spec, progress=progress)
-    trajs, errors = load_trajectories([folder], joint_ranges(spec.scope))
-    mode = spec.actions.mode
-    usable = []
-    for traj in trajs:
-        problem = action_problem(traj, mode)
-        if problem:
-            errors.append(f"trajectory of {traj.meta.get('subject', '?')} seed {traj.meta.get('seed', '?')}: {problem}")
-        else:
-            usable.append(traj)
-    for message in errors:
+    named, errors = load_recordings([folder], joint_ranges(spec.scope))
+    prepared = with_actions(FastEnv(spec), [(str(f), t) for f, t in named])
+    for message in errors + prepared.errors:
         console.print(f"[yellow]skipped[/yellow] {escape(message)}", highlight=False)
-    if not usable:
-        raise FileNotFoundError(f"no usable demonstrations (with actions) in {folder}")
-    return usable
-
-
-def action_problem(traj: Trajectory, mode: str) -> str | None:
-    """Why a trajectory's actions cannot be learned from in this action mode, or None."""
-    if traj.actions is None:
-        return "has no actions"
-    a = np.asarray(traj.actions)
-    if mode == "discrete" and a.ndim != 1:
-        return f"has continuous actions {a.shape}, the spec's actions are discrete"
-    width = {"continuous": 7, "rates": 5}.get(mode)
-    if width is not None and (a.ndim != 2 or a.shape[1] != width):
-        return f"has actions of shape {a.shape}, the spec's actions are {mode} ({width} per step)"
-    return None
+    for note in prepared.notes(spec.actions.mode):
+        console.print(note, markup=False, highlight=False)
+    if not prepared.trajectories:
+        raise FileNotFoundError(f"no usable demonstrations in {folder}")
+    return prepared.trajectories
 
 
 def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = True) -> Learner:
@@ -143,7 +126,8 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     transitions = expert_transitions(env, demos)
     ranked = None
     if d.ranking and disc.shaped and not off_policy:
-        ranked = RankedRollouts(env, d.ranking_noise, d.ranking_episodes, repeat=d.ranking_repeat)
+        actor = None if irl.demonstrations.path is None else cloned_actor(spec, demos)  # D-REX: no expert
+        ranked = RankedRollouts(env, d.ranking_noise, d.ranking_episodes, repeat=d.ranking_repeat, actor=actor)
     elif d.ranking and irl.algorithm == "airl":  # GAIL has no r_psi to rank, so it goes without a word
         console.print(
             "[dim]irl.discriminator.ranking: the ranking prior is for shaped AIRL on PPO; this run goes without it[/]"
