@@ -1,4 +1,5 @@
-"""Reference scores for normalising: a uniformly random policy (0) and the scripted expert (1)."""
+"""Reference scores for normalising: a uniformly random policy (0) and the scripted expert (1), or, for a model
+learned from recordings, the mean of those recordings (1)."""
 
 from __future__ import annotations
 
@@ -14,8 +15,10 @@ from .scoring import NORMALISED, Scorer
 REFERENCE_SEED = 90000  # held-out seeds, apart from training (0..), evaluation (10000..) and checks (20000..)
 
 
-def reference_trajectories(scorer: Scorer, episodes: int, seed: int = REFERENCE_SEED) -> dict[str, list]:
-    """Random-policy and scripted-expert trajectories on the same held-out seeds."""
+def reference_trajectories(
+    scorer: Scorer, episodes: int, seed: int = REFERENCE_SEED, recordings: list | None = None
+) -> dict[str, list]:
+    """Random-policy trajectories on held-out seeds, and the scripted expert's on the same seeds (or `recordings`)."""
     env = scorer.env
     env.action_space.seed(seed)
     seeds = range(seed, seed + episodes)
@@ -25,11 +28,14 @@ def reference_trajectories(scorer: Scorer, episodes: int, seed: int = REFERENCE_
         )[0]
         for s in seeds
     ]
-    return {"random": random, "expert": expert_trajectories(env, seeds)}
+    return {"random": random, "expert": expert_trajectories(env, seeds) if recordings is None else recordings}
 
 
-def reference_scores(scorer: Scorer, episodes: int = 3, cache: Path | None = None) -> dict:
-    """Mean scores of each reference; read from / written to `cache` (a JSON file) when given."""
+def reference_scores(
+    scorer: Scorer, episodes: int = 3, cache: Path | None = None, recordings: list | None = None
+) -> dict:
+    """Mean scores of each reference; read from / written to `cache` (a JSON file) when given. With `recordings`
+    (trajectories), their mean is the upper reference instead of the scripted expert's."""
     key = {
         "task_hash": task_hash(scorer.spec),
         "episodes": episodes,
@@ -37,6 +43,8 @@ def reference_scores(scorer: Scorer, episodes: int = 3, cache: Path | None = Non
         "reward_hash": _reward_identity(scorer),
         "scores": list(NORMALISED),
     }
+    if recordings is not None:
+        key["expert"] = sorted(f"{t.meta.get('subject', '')}:{t.meta.get('seed', 0)}" for t in recordings)
     if cache is not None and cache.exists():
         try:
             saved = json.loads(cache.read_text())
@@ -48,9 +56,13 @@ def reference_scores(scorer: Scorer, episodes: int = 3, cache: Path | None = Non
         "key": key,
         "description": f"means over {episodes} episodes on seeds {REFERENCE_SEED}.."
         f"{REFERENCE_SEED + episodes - 1}: random = uniform random actions, "
-        "expert = the scripted expert (fastrl.agents.expert)",
+        + (
+            "expert = the scripted expert (fastrl.agents.expert)"
+            if recordings is None
+            else f"expert = the {len(recordings)} recordings the model learned from"
+        ),
     }
-    for name, trajs in reference_trajectories(scorer, episodes).items():
+    for name, trajs in reference_trajectories(scorer, episodes, recordings=recordings).items():
         scored = [scorer.score(t) for t in trajs]
         out[name] = {
             k: (None if scored[0].scores[k] is None else float(np.mean([s.scores[k] for s in scored])))
@@ -68,9 +80,16 @@ def _reward_identity(scorer: Scorer) -> str | None:
     return None if nets is None else getattr(nets, "identity", None)
 
 
-def expert_paths(scorer: Scorer, seeds) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """The scripted expert's (time, tip path) on each seed: the reference a trainee deviates from."""
+def expert_paths(scorer: Scorer, seeds, recordings: list | None = None) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """The scripted expert's (time, tip path) on each seed: the reference a trainee deviates from. With
+    `recordings` (best first), the best recording on that seed, else the best of all, instead."""
     out = {}
+    if recordings is not None:
+        for seed in sorted(set(int(s) for s in seeds)):
+            same = [t for t in recordings if int(t.meta.get("seed", 0)) == seed]
+            traj = (same or recordings)[0]
+            out[seed] = (traj.time - traj.time[0], scorer.tip_path(traj.portal))
+        return out
     for seed in sorted(set(int(s) for s in seeds)):
         traj = expert_trajectories(scorer.env, [seed])[0]
         out[seed] = (traj.time - traj.time[0], scorer.tip_path(traj.portal))

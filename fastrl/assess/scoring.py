@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..data.inverse import to_control_rate
 from ..data.replay import replay
 from ..data.trajectory import Trajectory, TrajectoryError
 from ..env.fast_env import FastEnv
@@ -125,12 +126,13 @@ class Scorer:
         return TrajectoryScores(name or str(traj.meta.get("subject", "")), meta, scores, time, tip, values)
 
     def score_file(self, path: Path) -> TrajectoryScores:
-        """Load, check and score one file; TrajectoryError or ValueError name the file and the problem."""
+        """Load, check and score one file (resampled to the control rate if it is off that grid); TrajectoryError
+        or ValueError name the file and the problem."""
         traj = Trajectory.load(path)
         problem = foreign_problem(traj, self.spec)
         if problem:
             raise TrajectoryError(f"{path}: {problem}")
-        return self.score(traj, Path(path).stem)
+        return self.score(to_control_rate(traj, self.spec.episode.control_hz), Path(path).stem)
 
 
 def normalise(scored: list[TrajectoryScores], references: dict) -> None:

@@ -14,6 +14,7 @@ from ..assess.figures import deviations, group_of, plot_deviation, plot_distribu
 from ..assess.references import expert_paths, reference_scores
 from ..assess.report import build_report, csv_text, score_files, trajectory_files
 from ..assess.scoring import Scorer, normalise
+from ..data.recordings import load_recordings
 from ..irl.networks import load_networks
 from ..log.assessment import log_assessment
 from ..spec import load_spec
@@ -40,6 +41,20 @@ def load_scorer(run: Path | None, spec_path: Path | None) -> tuple[Scorer, str |
     if spec_path is None:
         raise FileNotFoundError("give --run RUN_DIR (learned scores) or --spec SPEC (heuristic and kinematic only)")
     return Scorer(load_spec(spec_path)), None
+
+
+def learned_from(scorer: Scorer) -> list | None:
+    """The recordings a run learned from (its `irl.demonstrations.path`), best heuristic return first; None when
+    it learned from the scripted expert or from nothing: then the scripted expert is the reference."""
+    spec = scorer.spec
+    folder = spec.irl.demonstrations.path
+    if not scorer.learned or folder is None or not Path(folder).is_dir():
+        return None
+    recordings = [t for _, t in load_recordings([folder])[0]]
+    if not recordings:
+        return None
+    heuristic = [scorer.score(t).scores["heuristic"] for t in recordings]
+    return [recordings[i] for i in sorted(range(len(recordings)), key=lambda i: -heuristic[i])]
 
 
 def outputs_for(output: Path | None, run: Path | None) -> dict[str, Path]:
@@ -73,7 +88,8 @@ def assess(
     paths, seconds = outputs_for(output, run), {}
     t0 = time.perf_counter()
     cache = run / "assessment" / "references.json" if run is not None else None
-    references = reference_scores(scorer, reference_episodes, cache)
+    recordings = learned_from(scorer)
+    references = reference_scores(scorer, reference_episodes, cache, recordings)
     seconds["references"] = time.perf_counter() - t0
     files = trajectory_files(inputs)
     t0 = time.perf_counter()
@@ -91,6 +107,9 @@ def assess(
     normalise(scored, references)
     seconds["scoring"] = time.perf_counter() - t0
     report = build_report(scored, references, problems, scorer.learned)
+    if recordings is not None:  # 1 is the recordings learned from, not the scripted expert
+        report["normalisation"] = report["normalisation"].replace("scripted expert", "recordings learned from")
+        report["warnings"] = [w.replace("scripted expert", "recordings learned from") for w in report["warnings"]]
     report["seconds"] = seconds
     result = Assessment(report, {}, seconds)
     paths["json"].parent.mkdir(parents=True, exist_ok=True)
@@ -98,7 +117,8 @@ def assess(
     result.files["csv"] = paths["csv"]
     if pictures and scored:
         t0 = time.perf_counter()
-        _pictures(scorer, scored, report, paths, recording_id or f"assessment-{scorer.spec.name}", result)
+        rid = recording_id or f"assessment-{scorer.spec.name}"
+        _pictures(scorer, scored, report, paths, rid, result, recordings)
         seconds["pictures"] = time.perf_counter() - t0
     paths["json"].write_text(json.dumps(report, indent=2, default=float))
     result.files["json"] = paths["json"]
@@ -106,11 +126,17 @@ def assess(
 
 
 def _pictures(
-    scorer: Scorer, scored, report: dict, paths: dict[str, Path], recording_id: str, result: Assessment
+    scorer: Scorer,
+    scored,
+    report: dict,
+    paths: dict[str, Path],
+    recording_id: str,
+    result: Assessment,
+    recordings: list | None = None,
 ) -> None:
     """PNG figures and the Rerun recording of the assessment."""
     by = report["grouped_by"]
-    devs = deviations(scored, expert_paths(scorer, [s.meta.get("seed", 0) for s in scored]))
+    devs = deviations(scored, expert_paths(scorer, [s.meta.get("seed", 0) for s in scored], recordings))
     result.files["paths"] = plot_paths(scored, by, paths["paths"], scorer.spec.scene.radius)
     result.files["deviation"] = plot_deviation(scored, devs, by, paths["deviation"])
     result.files["distributions"] = plot_distributions(report, paths["distributions"])

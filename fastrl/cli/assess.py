@@ -1,0 +1,73 @@
+"""The paper's protocol on recordings as one command (`fastrl assess`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+
+from . import RunsOpt, SetOpt, app, err, exit_with, out
+
+
+@app.command(name="assess")
+def assess_cohort(
+    inputs: Annotated[
+        list[Path],
+        typer.Argument(metavar="COHORT_DIR...", help="trajectory .npz files or folders", show_default=False),
+    ],
+    spec: Annotated[Path, typer.Option("--spec", metavar="SPEC", help="the task the recordings were made in")],
+    top: Annotated[int, typer.Option("--top", metavar="K", help="learn from the K best recordings")] = 10,
+    by: Annotated[str, typer.Option(help="rank by heuristic, length (path) or time")] = "heuristic",
+    algorithm: Annotated[str, typer.Option(help="airl or gail")] = "airl",
+    set_: SetOpt = None,
+    output: Annotated[
+        Path | None,
+        typer.Option("-o", "--output", help="JSON report (CSV, PNGs and .rrd beside it; default RUN/scores.json)"),
+    ] = None,
+    runs: RunsOpt = Path("runs"),
+    pictures: Annotated[bool, typer.Option(help="write the PNG figures and the Rerun recording")] = True,
+    progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
+) -> None:
+    """Rank recordings, learn reward, value and policy from the best K without their actions, score them all."""
+    from ..agents.sb3 import CheckpointMismatch
+    from ..runner.protocol import run_protocol
+    from ..spec import SpecError
+    from .score import print_report
+
+    try:
+        done = run_protocol(
+            inputs,
+            spec,
+            top,
+            by,
+            algorithm,
+            list(set_ or []),
+            runs,
+            output,
+            console=err,
+            progress=progress,
+            pictures=pictures,
+        )
+    except (SpecError, FileNotFoundError, ValueError, CheckpointMismatch) as e:
+        exit_with(e)
+    report = done.assessment.report
+    problems = list(report["problems"])
+    problems += [p for p in done.skipped if not any(p.split(":")[0] in q for q in problems)]
+    for problem in problems:
+        err.print(f"skipped {problem}", markup=False, style="yellow")
+    for warning in report["warnings"]:
+        err.print(f"note: {warning}", markup=False, style="yellow")
+    print_report(report)
+    out.print(done.why, markup=False)
+    for row in done.chosen:
+        out.print(
+            f"  {row['file']}: heuristic {row['heuristic']:.3g}, subtasks {row['subtasks']:.0%}, "
+            f"path {row['path_length']:.3f} m, time {row['time']:.1f} s",
+            markup=False,
+        )
+    out.print(f"scored {len(report['trajectories'])} trajectories; {len(problems)} skipped")
+    out.print(f"  learned networks: {escape(str(done.learned))} (fastrl score --run {escape(str(done.learned))} ...)")
+    for kind, path in done.assessment.files.items():
+        out.print(f"  {kind}: {escape(str(path))}")

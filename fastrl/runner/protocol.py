@@ -1,0 +1,154 @@
+"""The paper's protocol on recordings (`fastrl assess`): rank every trajectory, learn reward, value and policy from
+the best K without their actions, score them all, and keep the learned networks for `fastrl score --run`."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from rich.console import Console
+
+from ..assess.scoring import Scorer, TrajectoryScores, foreign_problem
+from ..data.inverse import to_control_rate
+from ..data.recordings import load_recordings
+from ..data.trajectory import Trajectory, TrajectoryError
+from ..spec import load_spec
+from .assessment import Assessment, assess
+from .rundir import new_run_dir, update_meta, write_meta
+
+BY = {
+    "heuristic": "the spec's heuristic return (higher first)",
+    "length": "subtasks completed (more first), then camera path length (shorter first)",
+    "time": "subtasks completed (more first), then duration (shorter first)",
+}
+ALGORITHMS = ("airl", "gail")
+
+
+@dataclass
+class Protocol:
+    """What one `fastrl assess` did: where, from which recordings it learned and why, what it skipped."""
+
+    run: Path
+    learned: Path
+    chosen: list[dict]
+    why: str
+    assessment: Assessment
+    skipped: list[str] = field(default_factory=list)
+
+
+def rank_key(s: TrajectoryScores, by: str) -> tuple:
+    """Sort key of a scored trajectory: best first under `by` (ties: the file name)."""
+    if by == "heuristic":
+        return (-s.scores["heuristic"], s.name)
+    return (-s.scores["subtasks"], s.scores["path_length" if by == "length" else "time"], s.name)
+
+
+def rank_recordings(spec, inputs, by: str) -> tuple[list[tuple[TrajectoryScores, Trajectory]], list[str]]:
+    """Every readable recording of this task on the control grid, scored by replay and sorted best first; the
+    files that cannot be used, as messages naming them."""
+    named, skipped = load_recordings(inputs)
+    scorer, hz = Scorer(spec), spec.episode.control_hz
+    ranked = []
+    for path, traj in named:
+        try:
+            problem = foreign_problem(traj, spec)
+            if problem:
+                raise TrajectoryError(problem)
+            traj = to_control_rate(traj, hz)
+            ranked.append((scorer.score(traj, path.stem), traj))
+        except (TrajectoryError, ValueError) as e:
+            skipped.append(f"{path}: {e}")
+    ranked.sort(key=lambda pair: rank_key(pair[0], by))
+    return ranked, skipped
+
+
+def write_best(chosen: list[tuple[TrajectoryScores, Trajectory]], folder: Path) -> list[Path]:
+    """The chosen recordings without their actions, one file each (names made unique)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for s, traj in chosen:
+        path, k = folder / f"{s.name}.npz", 1
+        while path.exists():
+            k += 1
+            path = folder / f"{s.name}-{k}.npz"
+        meta = {**traj.meta, "actions": "dropped"} if traj.actions is not None else dict(traj.meta)
+        paths.append(Trajectory(traj.time, traj.portal, meta).save(path))
+    return paths
+
+
+def run_protocol(
+    inputs: list[Path],
+    spec_path: Path,
+    top: int,
+    by: str = "heuristic",
+    algorithm: str = "airl",
+    overrides=(),
+    root: Path = Path("runs"),
+    output: Path | None = None,
+    console: Console | None = None,
+    progress: bool = True,
+    pictures: bool = True,
+) -> Protocol:
+    """Rank, choose the best `top`, learn from them without actions, score everything; return what was done."""
+    from .run import start_run
+
+    console = console or Console(stderr=True)
+    if by not in BY:
+        raise ValueError(f"--by must be one of {', '.join(BY)}, got {by!r}")
+    if algorithm not in ALGORITHMS:
+        raise ValueError(f"--algorithm must be one of {', '.join(ALGORITHMS)}, got {algorithm!r}")
+    if top < 1:
+        raise ValueError(f"--top must be at least 1, got {top}")
+    spec = load_spec(spec_path, overrides)
+    ranked, skipped = rank_recordings(spec, inputs, by)
+    if not ranked:
+        raise FileNotFoundError("no recording could be read and replayed: nothing to learn from")
+    chosen = ranked[:top]
+    run = new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
+    write_meta(run, spec, str(spec_path), {"status": "learning", "overrides": list(overrides), "kind": "assess"})
+    write_best(chosen, run / "best")
+    rows = [{"file": s.name, "subject": s.subject, "skill": s.skill, **_criterion(s)} for s, _ in chosen]
+    why = (
+        f"learned from the {len(chosen)} best of {len(ranked)} recordings by {BY[by]}"
+        + (f" (the next best: {ranked[top][0].name})" if len(ranked) > top else " (all of them)")
+        + "; their actions dropped, recovered from their states"
+    )
+    console.print(why, markup=False, highlight=False)
+    learned = start_run(
+        spec_path,
+        [*overrides, f"irl.algorithm={algorithm}", f"irl.demonstrations.path={run / 'best'}"],
+        console=console,
+        progress=progress,
+        into=run / "learned",
+    )
+    update_meta(run, status="scoring")
+    result = assess(
+        list(inputs),
+        run=learned,
+        output=output or run / "scores.json",
+        console=console,
+        progress=progress,
+        pictures=pictures,
+    )
+    summary = {
+        "spec": spec.name,
+        "by": by,
+        "rule": BY[by],
+        "top": top,
+        "algorithm": algorithm,
+        "why": why,
+        "chosen": rows,
+        "order": [s.name for s, _ in ranked],
+        "skipped": skipped,
+        "learned": str(learned),
+        "scores": {k: str(v) for k, v in result.files.items()},
+    }
+    (run / "protocol.json").write_text(json.dumps(summary, indent=2, default=float))
+    update_meta(run, status="done")
+    return Protocol(run, learned, rows, why, result, skipped)
+
+
+def _criterion(s: TrajectoryScores) -> dict:
+    """The figures a recording was ranked by."""
+    return {k: s.scores[k] for k in ("heuristic", "subtasks", "path_length", "time")}
