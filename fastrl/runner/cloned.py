@@ -3,6 +3,8 @@ scripted expert."""
 
 from __future__ import annotations
 
+import warnings
+
 from ..agents.bc import behaviour_clone
 from ..agents.sb3 import build_model, make_vec_env, policy_function
 from ..data.replay import demonstration_pairs
@@ -25,7 +27,9 @@ def cloned_actor(spec: TaskSpec, demos: list[Trajectory]) -> ClonedActor:
     """Behavioural cloning (the spec's `irl.bc` settings, PPO's policy network) of demonstrations with actions."""
     bc = spec.irl.bc
     venv = make_vec_env(spec, 1, spec.train.seed)  # the ranking prior is for PPO generators: a PPO policy
-    model = build_model(spec, venv)
+    with warnings.catch_warnings():  # PPO's batch-size advice for one env: this model is only fitted offline
+        warnings.simplefilter("ignore", UserWarning)
+        model = build_model(spec, venv)
     obs, actions = demonstration_pairs(FastEnv(spec), demos)
     behaviour_clone(model, venv, obs, actions, bc.epochs, bc.batch_size, bc.learning_rate, spec.train.seed)
     return ClonedActor(policy_function(model, venv))
