@@ -63,8 +63,10 @@ def rank_recordings(spec, inputs, by: str) -> tuple[list[tuple[TrajectoryScores,
     return ranked, skipped
 
 
-def write_best(chosen: list[tuple[TrajectoryScores, Trajectory]], folder: Path) -> list[Path]:
-    """The chosen recordings without their actions, one file each (names made unique)."""
+def write_best(
+    chosen: list[tuple[TrajectoryScores, Trajectory]], folder: Path, keep_actions: bool = False
+) -> list[Path]:
+    """The chosen recordings without their actions (unless `keep_actions`), one file each (names made unique)."""
     folder.mkdir(parents=True, exist_ok=True)
     paths = []
     for s, traj in chosen:
@@ -72,6 +74,9 @@ def write_best(chosen: list[tuple[TrajectoryScores, Trajectory]], folder: Path) 
         while path.exists():
             k += 1
             path = folder / f"{s.name}-{k}.npz"
+        if keep_actions:
+            paths.append(traj.save(path))
+            continue
         meta = {**traj.meta, "actions": "dropped"} if traj.actions is not None else dict(traj.meta)
         paths.append(Trajectory(traj.time, traj.portal, meta).save(path))
     return paths
@@ -89,8 +94,10 @@ def run_protocol(
     console: Console | None = None,
     progress: bool = True,
     pictures: bool = True,
+    keep_actions: bool = False,
 ) -> Protocol:
-    """Rank, choose the best `top`, learn from them without actions, score everything; return what was done."""
+    """Rank, choose the best `top`, learn from them without actions, score everything; return what was done.
+    `keep_actions` (bench/learn_from_people.py's comparison) learns from the recorded actions where there are."""
     from .run import start_run
 
     console = console or Console(stderr=True)
@@ -107,17 +114,22 @@ def run_protocol(
     chosen = ranked[:top]
     run = new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
     write_meta(run, spec, str(spec_path), {"status": "learning", "overrides": list(overrides), "kind": "assess"})
-    write_best(chosen, run / "best")
+    write_best(chosen, run / "best", keep_actions)
     rows = [{"file": s.name, "subject": s.subject, "skill": s.skill, **_criterion(s)} for s, _ in chosen]
     why = (
         f"learned from the {len(chosen)} best of {len(ranked)} recordings by {BY[by]}"
         + (f" (the next best: {ranked[top][0].name})" if len(ranked) > top else " (all of them)")
-        + "; their actions dropped, recovered from their states"
+        + ("; their recorded actions kept" if keep_actions else "; their actions dropped, recovered from their states")
     )
     console.print(why, markup=False, highlight=False)
     learned = start_run(
         spec_path,
-        [*overrides, f"irl.algorithm={algorithm}", f"irl.demonstrations.path={run / 'best'}"],
+        [
+            *overrides,
+            f"irl.algorithm={algorithm}",
+            f"irl.demonstrations.path={run / 'best'}",
+            "experiment.enabled=false",
+        ],
         console=console,
         progress=progress,
         into=run / "learned",

@@ -81,7 +81,8 @@ class DiscriminatorSettings(Strict):
         0.0,
         ge=0,
         description="shaped AIRL on PPO: weight of a ranking loss on r_psi (D-REX): "
-        "over snippets of the scripted expert whose actions are random at `ranking_noise` rates, "
+        "over snippets of the scripted expert (with `demonstrations.path`: of a policy cloned from those "
+        "recordings) whose actions are random at `ranking_noise` rates, "
         "less noise must sum higher; 0: none (GAIL and a SAC generator go without it)",
     )
     ranking_noise: list[Annotated[float, Field(ge=0, le=1)]] = Field(
