@@ -157,3 +157,18 @@ def test_assess_runs_the_protocol_on_a_task_without_a_scripted_expert(tmp_path, 
     )
     assert res.exit_code == 0, res.output
     assert json.loads((tmp_path / "new.json").read_text())["trajectories"][0]["reward"] is not None
+
+
+def test_assess_reports_bad_options_and_empty_cohorts_in_one_line(tmp_path):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    (empty / "broken.npz").write_bytes(b"nothing")
+    for extra, message in (
+        (["--by", "speed"], "--by must be one of heuristic, length, time"),
+        (["--algorithm", "bc"], "--algorithm must be one of airl, gail"),
+        (["--top", "0"], "--top must be at least 1"),
+        ([], "nothing to learn from; 1 skipped, the first: " + str(empty / "broken.npz")),
+    ):
+        res = CliRunner().invoke(app, ["assess", str(empty), "--spec", str(NO_EXPERT), "--runs", str(tmp_path), *extra])
+        assert res.exit_code == 2 and message in res.output and "Traceback" not in res.output, res.output
+    assert not list(tmp_path.glob("medial_pair/*"))  # nothing half-made

@@ -110,7 +110,8 @@ def run_protocol(
     spec = load_spec(spec_path, overrides)
     ranked, skipped = rank_recordings(spec, inputs, by)
     if not ranked:
-        raise FileNotFoundError("no recording could be read and replayed: nothing to learn from")
+        first = f"; {len(skipped)} skipped, the first: {skipped[0]}" if skipped else ""
+        raise FileNotFoundError(f"no recording could be read and replayed: nothing to learn from{first}")
     chosen = ranked[:top]
     run = new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
     write_meta(run, spec, str(spec_path), {"status": "learning", "overrides": list(overrides), "kind": "assess"})
