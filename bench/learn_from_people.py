@@ -3,6 +3,7 @@
     python bench/learn_from_people.py --tasks tracelines                    # one FAST task, without vs with actions
     python bench/learn_from_people.py                                       # all three FAST tasks
     python bench/learn_from_people.py --tasks --liver                       # the liver tour only
+    python bench/learn_from_people.py --tasks --recovery tracelines         # recovered-action accuracy only
     python bench/learn_from_people.py --from-json docs/learn_from_people.json   # re-print earlier results
 
 Per FAST task: a cohort (`fastrl cohort SPEC --levels 5 --per-level 10`, seed 0, under runs/bench-people/<task>/),
@@ -81,6 +82,39 @@ def agreement_on_best(task: str, run: Path, full: Path) -> dict:
     return {"steps": steps, "exact_match": matched / max(steps, 1)}
 
 
+TRACKER_SD = (0.1, 0.1, 0.2, 0.3, 0.3)  # deg, deg, mm, deg, deg: noise added to the portal coordinates
+
+
+def recovery_table(task: str, full: Path) -> dict:
+    """Recovered-action agreement on the whole cohort: as recorded, resampled 20 -> 50 -> 20 Hz, and that plus
+    Gaussian tracker noise (TRACKER_SD) at 50 Hz."""
+    import numpy as np
+
+    from fastrl.data.inverse import ActionRecovery, agreement, to_control_rate
+    from fastrl.data.trajectory import Trajectory
+    from fastrl.env import FastEnv
+    from fastrl.spec import load_spec
+
+    spec = load_spec(f"specs/{task}.yaml")
+    rec, rng = ActionRecovery(FastEnv(spec)), np.random.default_rng(0)
+    sd = np.radians(TRACKER_SD) * np.array([1, 1, 0, 1, 1]) + np.array([0, 0, TRACKER_SD[2] / 1000, 0, 0])
+    out = {}
+    for label in ("as recorded", "50 Hz", "50 Hz + tracker noise"):
+        steps, matched, t0 = 0, 0.0, time.perf_counter()
+        for f in sorted(full.glob("*.npz")):
+            t = Trajectory.load(f)
+            x = Trajectory(t.time, t.portal, t.meta)
+            if label != "as recorded":
+                tt = np.arange(0, t.time[-1] + 1e-9, 0.02)
+                q = np.column_stack([np.interp(tt, t.time, t.portal[:, j]) for j in range(5)])
+                q = q + (rng.normal(0, 1, q.shape) * sd if "noise" in label else 0.0)
+                x = to_control_rate(Trajectory(tt, q, t.meta), spec.episode.control_hz)
+            a = agreement(t.actions, rec.recover(x).actions, spec.actions.mode)
+            steps, matched = steps + a["steps"], matched + a["exact_match"] * a["steps"]
+        out[label] = {"steps": steps, "exact_match": matched / steps, "seconds": time.perf_counter() - t0}
+    return out
+
+
 def protocol(task: str, inputs: Path, keep: bool, args) -> dict:
     """One `fastrl assess` run and its figures."""
     from rich.console import Console
@@ -147,6 +181,9 @@ def show(results: dict) -> None:
             print(f"| {task} | {variant} | {' | '.join(cells)} | {r['policy_subtasks']:.1%} |")
         if "recovery" in by:
             print(f"  recovered actions on the 10 chosen: {by['recovery']['exact_match']:.1%} exact match")
+    for task, rows in results.get("recovery", {}).items():
+        cells = ", ".join(f"{k}: {v['exact_match']:.1%} of {v['steps']} steps" for k, v in rows.items())
+        print(f"recovered actions, {task} cohort (exact match): {cells}")
     liver = results.get("liver")
     if liver:
         print("liver tour, best 10 of 100 without actions: Spearman rho (p)")
@@ -159,6 +196,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--tasks", nargs="*", default=list(TASKS))
     ap.add_argument("--variants", nargs="*", default=["without", "with"])
+    ap.add_argument("--recovery", nargs="*", default=[], help="recovered-action agreement on these tasks' cohorts")
     ap.add_argument("--liver", action="store_true", help="also the liver tour (100 procedures, best 10)")
     ap.add_argument("--timesteps", type=int, default=600000, help="generator step cap per FAST run")
     ap.add_argument("--liver-timesteps", type=int, default=300000)
@@ -183,6 +221,10 @@ def main() -> None:
                 by["recovery"] = agreement_on_best(task, Path(by[variant]["run"]), full)
             args.out.parent.mkdir(parents=True, exist_ok=True)
             args.out.write_text(json.dumps(results, indent=2))
+    if args.recovery:
+        for task in args.recovery:
+            results.setdefault("recovery", {})[task] = recovery_table(task, cohort(task, 5, 10)[0])
+        args.out.write_text(json.dumps(results, indent=2))
     if args.liver:
         from fastrl.data.cohort import make_cohort
         from fastrl.data.trajectory import Trajectory
