@@ -32,9 +32,12 @@ def assess_cohort(
 ) -> None:
     """Rank recordings, learn reward, value and policy from the best K without their actions, score them all."""
     from ..agents.sb3 import CheckpointMismatch
+    from ..atomic import DiskFull
+    from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
     from ..runner.protocol import run_protocol
     from ..spec import SpecError
     from .score import print_report
+    from .stops import report_stop
 
     try:
         done = run_protocol(
@@ -50,6 +53,8 @@ def assess_cohort(
             progress=progress,
             pictures=pictures,
         )
+    except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
+        report_stop(stop)  # the learned run resumes with fastrl run --resume; rerun assess to score
     except (SpecError, FileNotFoundError, ValueError, CheckpointMismatch) as e:
         exit_with(e)
     report = done.assessment.report
