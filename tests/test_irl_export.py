@@ -1,12 +1,18 @@
-"""Pickle-free export of IRL networks: the loaded policy, value and reward reproduce SB3 and the discriminator."""
+"""Pickle-free export of IRL networks: the loaded policy, value and reward reproduce SB3 and the discriminator;
+safetensors files load without fastrl; an earlier version's .pt + .json pairs still load."""
 
 import hashlib
 import json
 import shutil
+import subprocess
+import sys
+import textwrap
 
 import numpy as np
 import pytest
 import torch
+from safetensors import safe_open
+from safetensors.torch import load_file, save_file
 
 from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.env import FastEnv
@@ -26,7 +32,32 @@ SAC_TINY = [
     "train.sac.batch_size=32",
 ]
 GAMMA = 0.9
-FILES = {"policy.pt", "policy.json", "value.pt", "value.json", "reward.pt", "reward.json"}
+FILES = {"policy.safetensors", "value.safetensors", "reward.safetensors"}
+
+
+def read_header(path) -> dict:
+    """The JSON description in a safetensors file's header."""
+    with safe_open(str(path), "pt") as f:
+        return json.loads(f.metadata()["fastrl"])
+
+
+def edit_header(d, name, edit) -> None:
+    """Rewrite NAME.safetensors with its header description changed by edit(meta)."""
+    path = d / f"{name}.safetensors"
+    meta, tensors = read_header(path), load_file(str(path))
+    edit(meta)
+    save_file(tensors, str(path), metadata={"fastrl": json.dumps(meta)})
+
+
+def to_legacy(d) -> None:
+    """Turn each NAME.safetensors into the NAME.pt + NAME.json pair that fastrl wrote before safetensors."""
+    for path in sorted(d.glob("*.safetensors")):
+        pt, js = path.with_suffix(".pt"), path.with_suffix(".json")
+        meta = read_header(path)
+        torch.save(load_file(str(path)), pt)
+        meta |= {"weights": pt.name, "sha256": hashlib.sha256(pt.read_bytes()).hexdigest()}
+        js.write_text(json.dumps(meta, indent=2))
+        path.unlink()
 
 
 def raw_observations(spec, n: int, seed: int = 0) -> np.ndarray:
@@ -100,7 +131,7 @@ def test_ppo_policy_and_value_match_sb3(ppo_run, tmp_path):
     model, venv, obs = ppo_run
     save_networks(tmp_path, model, venv, spectral_disc(obs.shape[1], "airl"), GAMMA)
     paths = save_networks(tmp_path, model, venv, None, GAMMA)  # no discriminator: a stale reward is removed
-    assert {p.name for p in paths} == FILES - {"reward.pt", "reward.json"}
+    assert {p.name for p in paths} == FILES - {"reward.safetensors"}
     assert {p.name for p in tmp_path.iterdir()} == {p.name for p in paths}
     nets = load_networks(tmp_path)
     x = venv.normalize_obs(obs)
@@ -137,7 +168,7 @@ def test_airl_reward_and_potential_match_the_spectral_discriminator(ppo_run, tmp
     save_networks(tmp_path, model, venv, disc, GAMMA)
     assert all(torch.equal(before[k], v) for k, v in disc.state_dict().items())  # no power-iteration step
     assert disc.training
-    weights = torch.load(tmp_path / "reward.pt", weights_only=True)
+    weights = load_file(str(tmp_path / "reward.safetensors"))
     raw = disc.r_psi[0].parametrizations.weight.original
     assert not torch.allclose(weights["r_psi.0.weight"], raw, atol=1e-3)  # the effective weight W / sigma
     disc.eval()
@@ -231,14 +262,11 @@ def test_an_averaged_reward_is_the_mean_of_its_members_each_under_its_own_normal
     np.testing.assert_allclose(nets.potential(obs), (h_early + h_final) / 2, atol=1e-5)
     np.testing.assert_allclose(last.reward(obs), r_final, atol=1e-5)
     assert nets.absorbing_reward() == pytest.approx(np.mean(r_abs), rel=1e-5)
-    meta = json.loads((tmp_path / "reward.json").read_text())
-    meta["average"]["members"] = 3  # a member whose tensors are missing
-    (tmp_path / "reward.json").write_text(json.dumps(meta))
-    with pytest.raises(ValueError, match="reward.json.*average.2"):
+    edit_header(tmp_path, "reward", lambda m: m["average"].update(members=3))  # a member whose tensors are missing
+    with pytest.raises(ValueError, match="reward.safetensors.*average.2"):
         load_networks(tmp_path)
-    meta["average"] = [2]  # malformed: named, not a crash
-    (tmp_path / "reward.json").write_text(json.dumps(meta))
-    with pytest.raises(ValueError, match="reward.json.*average.members"):
+    edit_header(tmp_path, "reward", lambda m: m.update(average=[2]))  # malformed: named, not a crash
+    with pytest.raises(ValueError, match="reward.safetensors.*average.members"):
         load_networks(tmp_path)
 
 
@@ -326,24 +354,118 @@ def exported(ppo_run, tmp_path_factory):
 
 
 @pytest.mark.parametrize("name", list(CORRUPTIONS))
-def test_corrupted_files_raise_errors_naming_the_file(exported, tmp_path, name):
+def test_corrupted_legacy_files_raise_errors_naming_the_file(exported, tmp_path, name):
     corrupt, error, match = CORRUPTIONS[name]
     d = tmp_path / "nets"
     shutil.copytree(exported, d)
+    to_legacy(d)
     load_networks(d)  # the pristine copy loads
     corrupt(d)
     with pytest.raises(error, match=match):
         load_networks(d)
 
 
-def test_every_file_is_plain_json_or_weights_only_tensors(exported):
+def _truncate_safetensors(d):
+    data = (d / "policy.safetensors").read_bytes()
+    (d / "policy.safetensors").write_bytes(data[: len(data) // 2])
+
+
+def _no_description(d):
+    path = d / "value.safetensors"
+    save_file(load_file(str(path)), str(path))
+
+
+SAFETENSORS_CORRUPTIONS = {
+    "truncated": (_truncate_safetensors, ValueError, "policy.safetensors.*not a readable"),
+    "no description": (_no_description, ValueError, "value.safetensors.*'fastrl'"),
+    "missing layer width": (
+        lambda d: edit_header(d, "policy", lambda m: m["parts"]["pi"][0].pop("in")),
+        ValueError,
+        "policy.safetensors",
+    ),
+    "wrong layer width": (
+        lambda d: edit_header(d, "value", lambda m: m["parts"]["v"][0].update({"in": 3})),
+        ValueError,
+        "value.safetensors",
+    ),
+    "missing absorbing value": (
+        lambda d: edit_header(d, "reward", lambda m: m.pop("absorbing_value")),
+        ValueError,
+        "reward.safetensors.*absorbing_value",
+    ),
+    "missing file": (lambda d: (d / "value.safetensors").unlink(), FileNotFoundError, "value.safetensors"),
+}
+
+
+@pytest.mark.parametrize("name", list(SAFETENSORS_CORRUPTIONS))
+def test_corrupted_safetensors_raise_errors_naming_the_file(exported, tmp_path, name):
+    corrupt, error, match = SAFETENSORS_CORRUPTIONS[name]
+    d = tmp_path / "nets"
+    shutil.copytree(exported, d)
+    corrupt(d)
+    with pytest.raises(error, match=match):
+        load_networks(d)
+
+
+def test_an_earlier_versions_pt_and_json_pairs_load_to_the_same_networks(exported, ppo_run, tmp_path):
+    _, _, obs = ppo_run
+    d = tmp_path / "legacy"
+    shutil.copytree(exported, d)
+    to_legacy(d)
+    assert {p.suffix for p in d.iterdir()} == {".pt", ".json"}
+    new, old = load_networks(exported), load_networks(d)
+    np.testing.assert_array_equal(old.policy(obs), new.policy(obs))
+    np.testing.assert_array_equal(old.value(obs), new.value(obs))
+    np.testing.assert_array_equal(old.reward(obs), new.reward(obs))
+    np.testing.assert_array_equal(old.potential(obs), new.potential(obs))
+
+
+def test_every_file_is_safetensors_with_its_description_in_the_header(exported):
     assert {p.name for p in exported.iterdir()} == FILES  # no temporary files left behind
     for name in ("policy", "value", "reward"):
-        tensors = torch.load(exported / f"{name}.pt", weights_only=True)
+        tensors = load_file(str(exported / f"{name}.safetensors"))
         assert tensors and all(isinstance(k, str) and isinstance(v, torch.Tensor) for k, v in tensors.items())
-        meta = json.loads((exported / f"{name}.json").read_text())
+        meta = read_header(exported / f"{name}.safetensors")
+        assert meta["format"] == "fastrl.networks/1" and meta["network"] == name
         assert meta["obs_norm"] is not None and {"obs_norm.mean", "obs_norm.var"} <= set(tensors)
         linear = [(i, layer) for i, layer in enumerate(next(iter(meta["parts"].values()))) if layer["type"] == "linear"]
         assert linear and all(f"{next(iter(meta['parts']))}.{i}.weight" in tensors for i, _ in linear)
-    reward = json.loads((exported / "reward.json").read_text())
+    reward = read_header(exported / "reward.safetensors")
     assert {"kind", "gamma", "absorbing", "absorbing_value"} <= set(reward) and reward["kind"] == "airl"
+
+
+# The README's lines: a value network evaluated with safetensors and torch alone (no fastrl).
+README_SNIPPET = """
+import json, torch
+from safetensors import safe_open
+from safetensors.torch import load_file
+
+path = "networks/value.safetensors"
+w = load_file(path)
+with safe_open(path, "pt") as f:
+    meta = json.loads(f.metadata()["fastrl"])  # layers, observation normalisation, how parts combine
+
+def mlp(part, x):
+    for i, layer in enumerate(meta["parts"][part]):
+        if layer["type"] == "linear":
+            x = torch.nn.functional.linear(x, w[f"{part}.{i}.weight"], w.get(f"{part}.{i}.bias"))
+        else:
+            x = getattr(torch, layer["type"])(x)  # tanh, relu
+    return x
+
+norm = meta["obs_norm"]
+x = (obs - w["obs_norm.mean"]) / torch.sqrt(w["obs_norm.var"] + norm["epsilon"])
+value = mlp("v", x.clamp(-norm["clip"], norm["clip"]).float()).squeeze(-1)
+"""
+
+
+def test_the_readme_lines_evaluate_a_value_network_without_fastrl(exported, ppo_run, tmp_path):
+    _, _, obs = ppo_run
+    shutil.copytree(exported, tmp_path / "networks")
+    np.save(tmp_path / "obs.npy", obs.astype(np.float64))
+    script = "import numpy, torch\nobs = torch.as_tensor(numpy.load('obs.npy'))\n" + textwrap.dedent(README_SNIPPET)
+    script += "\nimport sys\nassert not any(m.startswith('fastrl') for m in sys.modules)\n"
+    script += "numpy.save('value.npy', value.numpy())\n"
+    res = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    np.testing.assert_allclose(np.load(tmp_path / "value.npy"), load_networks(exported).value(obs), atol=1e-5)

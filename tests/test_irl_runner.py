@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from safetensors import safe_open
 from typer.testing import CliRunner
 
 from fastrl.cli import app
@@ -77,9 +78,10 @@ def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
     assert nets.value(obs).shape == (len(obs),) and np.isfinite(nets.value(obs)).all()
     assert len(nets.policy(obs)) == len(obs)
     if algorithm == "bc":
-        assert not (run / "networks" / "reward.pt").exists()
+        assert not (run / "networks" / "reward.safetensors").exists()
         return
-    disc = json.loads((run / "networks" / "reward.json").read_text())["discriminator"]
+    with safe_open(str(run / "networks" / "reward.safetensors"), "pt") as f:
+        disc = json.loads(f.metadata()["fastrl"])["discriminator"]
     assert disc["policy_term"] is ("train.algo=SAC" not in extra)  # AIRL on SAC: f alone by default
     rewards = nets.reward(obs)
     assert rewards.shape == (len(obs) - 1,) and np.isfinite(rewards).all()

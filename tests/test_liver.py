@@ -233,7 +233,8 @@ def test_the_experiment_runs_end_to_end_and_resumes_without_redoing(tmp_path):
     for algo in ("gail", "airl"):
         for cell in result["table3"][algo].values():
             assert -1 <= cell["rho"] <= 1 and 0 <= cell["p"] <= 1
-        assert {f.name for f in (run / algo / "networks").iterdir()} >= {"reward.pt", "value.pt", "policy.pt"}
+        saved = {f.name for f in (run / algo / "networks").iterdir()}
+        assert saved >= {"reward.safetensors", "value.safetensors", "policy.safetensors"}
     assert len(list((run / "best").glob("*.npz"))) == 2 and len(list((run / "cohort").glob("*.npz"))) == 6
     assert (run / "table3.png").stat().st_size > 10_000
     verify = subprocess.run(

@@ -1,17 +1,20 @@
-"""Pickle-free export of an inverse-RL run: policy, value and learned reward as tensors (.pt) plus JSON architecture.
+"""Pickle-free export of a run's networks: policy, value and learned reward (with its potential) as safetensors.
 
-Each network is a pair NAME.pt (a flat dict of tensors, loaded with `torch.load(..., weights_only=True)`) and
-NAME.json (the layer lists, the observation normalisation, how the parts combine, and the .pt's sha256).
-Loading needs only json and torch: the MLPs are evaluated with plain torch ops, no stable-baselines3.
+Each network is one NAME.safetensors file: a flat dict of tensors, with a JSON description in its header metadata
+under "fastrl" (the layer lists, the observation normalisation, how the parts combine). Loading needs only
+safetensors and torch: the MLPs are evaluated with plain torch ops, no stable-baselines3. Earlier versions wrote a
+NAME.pt + NAME.json pair per network; fastrl.irl.networks still loads those.
 """
 
 from __future__ import annotations
 
+import json
 from contextlib import contextmanager
 from pathlib import Path
 
 import torch
 from gymnasium import spaces
+from safetensors.torch import save as save_safetensors
 from stable_baselines3 import SAC
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.policies import ActorCriticPolicy
@@ -20,9 +23,9 @@ from stable_baselines3.common.torch_layers import FlattenExtractor
 from stable_baselines3.common.vec_env import VecEnv, unwrap_vec_normalize
 from torch import nn
 
-from ..atomic import atomic_write, write_json
+from ..atomic import atomic_write
 from .discriminator import Discriminator
-from .networks import FORMAT, Networks, file_sha256, load_networks  # noqa: F401  (loading beside saving)
+from .networks import FORMAT, HEADER_KEY, Networks, load_networks  # noqa: F401  (loading beside saving)
 
 ACTIVATIONS = {nn.Tanh: "tanh", nn.ReLU: "relu"}
 
@@ -191,13 +194,16 @@ def average_export(snapshots: list[dict[str, torch.Tensor]]) -> tuple[dict, dict
     return {"average": {"members": len(snapshots)}}, tensors
 
 
-def write_pair(out_dir: Path, name: str, meta: dict, tensors: dict[str, torch.Tensor]) -> list[Path]:
-    """NAME.pt (tensors) then NAME.json (meta, with the .pt's file name and sha256)."""
-    pt, js = out_dir / f"{name}.pt", out_dir / f"{name}.json"
-    atomic_write(pt, lambda f: torch.save(tensors, f))
-    meta = {"format": FORMAT, "network": name, **meta, "weights": pt.name, "sha256": file_sha256(pt)}
-    write_json(js, meta)
-    return [pt, js]
+def write_network(out_dir: Path, name: str, meta: dict, tensors: dict[str, torch.Tensor]) -> list[Path]:
+    """NAME.safetensors: the tensors, with the description (format, network name, meta) as JSON in its header."""
+    path = out_dir / f"{name}.safetensors"
+    meta = {"format": FORMAT, "network": name, **meta}
+    own = {k: t.detach().cpu().contiguous().clone() for k, t in tensors.items()}  # safetensors refuses shared storage
+    data = save_safetensors(own, metadata={HEADER_KEY: json.dumps(meta)})
+    atomic_write(path, lambda f: f.write(data), needed=len(data))
+    for legacy in (out_dir / f"{name}.pt", out_dir / f"{name}.json"):  # an earlier version's pair, now superseded
+        legacy.unlink(missing_ok=True)
+    return [path]
 
 
 def save_networks(
@@ -208,7 +214,7 @@ def save_networks(
     gamma: float,
     snapshots: list[dict[str, torch.Tensor]] | None = None,
 ) -> list[Path]:
-    """Write policy, value and (with a discriminator) reward as .pt + .json pairs into out_dir; return the paths.
+    """Write policy, value and (with a discriminator) reward as .safetensors files into out_dir; return the paths.
 
     With `snapshots` (shaped AIRL's r_psi and h during training), the reward also holds them and the final
     networks as the members of their average."""
@@ -225,12 +231,12 @@ def save_networks(
             meta, tensors = meta | average_meta, tensors | average_tensors
         exports["reward"] = meta, tensors
     else:  # a stale reward from an earlier export would be loaded as this run's
-        for stale in (out_dir / "reward.json", out_dir / "reward.pt"):
+        for stale in (out_dir / "reward.safetensors", out_dir / "reward.json", out_dir / "reward.pt"):
             stale.unlink(missing_ok=True)
     paths = []
     for name, (meta, tensors) in exports.items():
         meta = {**meta, "obs_dim": int(model.observation_space.shape[0]), "obs_norm": norm}
-        paths += write_pair(out_dir, name, meta, {**tensors, **norm_tensors})
+        paths += write_network(out_dir, name, meta, {**tensors, **norm_tensors})
     return paths
 
 

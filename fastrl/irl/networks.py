@@ -1,4 +1,5 @@
-"""Load exported networks (JSON + tensors, `torch.load(weights_only=True)`) and evaluate them with plain torch."""
+"""Load exported networks (NAME.safetensors, or an earlier version's NAME.json + NAME.pt) and evaluate them with
+plain torch."""
 
 from __future__ import annotations
 
@@ -11,6 +12,12 @@ import numpy as np
 import torch
 
 FORMAT = "fastrl.networks/1"
+HEADER_KEY = "fastrl"  # the safetensors header metadata key holding the JSON description
+
+
+def has_networks(directory: Path) -> bool:
+    """Whether a folder holds exported networks (a policy, in either file format)."""
+    return any((Path(directory) / f"policy.{ext}").is_file() for ext in ("safetensors", "json"))
 
 
 def file_sha256(path: Path) -> str:
@@ -138,18 +145,47 @@ class Loaded:
         return value
 
 
+def _read_safetensors(path: Path) -> tuple[dict, dict[str, torch.Tensor]]:
+    """The JSON description in a safetensors header and the tensors; the file's sha256 added as its identity."""
+    from safetensors import safe_open
+    from safetensors.torch import load_file
+
+    try:
+        with safe_open(str(path), "pt") as f:
+            header = f.metadata() or {}
+        tensors = load_file(str(path))
+    except Exception as e:  # safetensors reports truncation and bad headers with its own error types
+        raise ValueError(f"{path}: not a readable safetensors file ({e})") from e
+    if HEADER_KEY not in header:
+        raise ValueError(f"{path}: no {HEADER_KEY!r} description in its header metadata")
+    try:
+        meta = json.loads(header[HEADER_KEY])
+    except json.JSONDecodeError as e:
+        raise ValueError(f"{path}: header metadata {HEADER_KEY!r} is not valid JSON ({e})") from e
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        raise ValueError(f"{path}: not a {FORMAT} file")
+    return meta | {"sha256": file_sha256(path)}, tensors
+
+
 def read_pair(directory: Path, name: str) -> Loaded:
-    """NAME.json and NAME.pt, or FileNotFoundError/ValueError naming the bad file."""
-    js = directory / f"{name}.json"
-    meta = _read_json(js)
-    if not isinstance(meta.get("sha256"), str):
-        raise ValueError(f"{js}: missing key 'sha256'")
-    tensors = _read_tensors(directory / f"{name}.pt", meta["sha256"])
+    """NAME.safetensors (or an earlier version's NAME.json and NAME.pt), or FileNotFoundError/ValueError naming the
+    bad file."""
+    js = directory / f"{name}.safetensors"
+    if js.is_file():
+        meta, tensors = _read_safetensors(js)
+    else:
+        js = directory / f"{name}.json"
+        if not js.is_file() and not (directory / f"{name}.pt").is_file():  # else an earlier pair: name its JSON
+            raise FileNotFoundError(f"{directory / name}.safetensors: file not found")
+        meta = _read_json(js)
+        if not isinstance(meta.get("sha256"), str):
+            raise ValueError(f"{js}: missing key 'sha256'")
+        tensors = _read_tensors(directory / f"{name}.pt", meta["sha256"])
     try:
         parts = {p: build_mlp(p, layers, tensors) for p, layers in meta["parts"].items()}
         return Loaded(js, meta, build_norm(meta, tensors), parts, tensors)
     except KeyError as e:
-        raise ValueError(f"{js}: missing key {e} (in the JSON, or as a tensor in {name}.pt)") from e
+        raise ValueError(f"{js}: missing key {e} (in the description, or as a tensor)") from e
     except (TypeError, AttributeError, ValueError) as e:
         raise ValueError(f"{js}: malformed ({e})") from e
 
@@ -208,7 +244,7 @@ class Networks:
 
     def _read_reward(self) -> Loaded | None:
         """The reward pair, None if none was saved."""
-        if not any((self.directory / f"reward.{ext}").exists() for ext in ("json", "pt")):
+        if not any((self.directory / f"reward.{ext}").exists() for ext in ("safetensors", "json", "pt")):
             return None
         loaded = read_pair(self.directory, "reward")
         loaded.variant("kind", {"airl": (), "gail": ()})
@@ -261,7 +297,7 @@ class Networks:
     def _reward_pair(self) -> Loaded:
         """The reward pair, or a clear error if none was saved."""
         if self._reward is None:
-            raise ValueError(f"{self.directory}: no reward network was saved (reward.json is missing)")
+            raise ValueError(f"{self.directory}: no reward network was saved (no reward.safetensors)")
         return self._reward
 
     @property
@@ -313,7 +349,7 @@ class Networks:
         """AIRL's shaping potential h(s) of a batch of raw observations."""
         r = self._reward_pair()
         if r.meta["form"] != "state":
-            raise ValueError(f"{self.directory / 'reward.json'}: only shaped AIRL has a shaping potential h")
+            raise ValueError(f"{r.path}: only shaped AIRL has a shaping potential h")
         with torch.no_grad():
             return (
                 torch.stack([m.h(self._states(r, obs, norm=m.norm)).squeeze(-1) for m in self._members]).mean(0).numpy()
@@ -337,5 +373,5 @@ class Networks:
 
 
 def load_networks(directory: Path, averaged: bool = True) -> Networks:
-    """The networks save_networks wrote into directory (json + torch.load(weights_only=True) only)."""
+    """The networks save_networks wrote into directory (safetensors, or json + torch.load(weights_only=True))."""
     return Networks(Path(directory), averaged)

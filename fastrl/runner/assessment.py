@@ -15,7 +15,7 @@ from ..assess.references import expert_paths, reference_scores
 from ..assess.report import build_report, csv_text, score_files, trajectory_files
 from ..assess.scoring import Scorer, normalise
 from ..data.recordings import load_recordings
-from ..irl.networks import load_networks
+from ..irl.networks import has_networks, load_networks
 from ..log.assessment import log_assessment
 from ..spec import load_spec
 
@@ -35,7 +35,7 @@ def load_scorer(run: Path | None, spec_path: Path | None) -> tuple[Scorer, str |
         if not (run / "spec.yaml").exists():
             raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
         networks = None
-        if (run / "networks" / "policy.json").exists():
+        if has_networks(run / "networks"):
             networks = load_networks(run / "networks")
         return Scorer(load_spec(run / "spec.yaml"), networks), run.name
     if spec_path is None:

@@ -16,7 +16,7 @@ from ..assess.scoring import Scorer, TrajectoryScores
 from ..atomic import write_json
 from ..data.cohort import make_cohort
 from ..data.trajectory import Trajectory, load_files
-from ..irl.networks import load_networks
+from ..irl.networks import has_networks, load_networks
 from ..log.experiment import log_experiment, plot_correlations
 from ..model.compiler import compile_task
 from ..model.scope import joint_ranges
@@ -113,7 +113,7 @@ def train_irl(run: Path, algo: str, console: Console, progress: bool) -> Path:
     from .run import resume_run, start_run
 
     sub = run / algo
-    if (sub / "networks" / "policy.json").exists() and (sub / "eval.json").exists():
+    if has_networks(sub / "networks") and (sub / "eval.json").exists():
         return sub
     if sub.exists() and latest_checkpoint(sub) is not None:
         return resume_run(sub, console, progress)

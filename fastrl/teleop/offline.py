@@ -12,7 +12,7 @@ from ..assist import Suggester, ValueCue, cue_colour, project_points
 from ..data.replay import replay_episode
 from ..data.trajectory import Trajectory, TrajectoryError
 from ..env.fast_env import FastEnv
-from ..irl.networks import load_networks
+from ..irl.networks import has_networks, load_networks
 from ..log.attempt import log_attempt
 from ..spec import load_spec, spec_hash
 from ..spec.models import TaskSpec
@@ -27,8 +27,8 @@ def spec_of_run(run: Path) -> TaskSpec:
 
 def load_networks_of(run: Path):
     """A run's exported networks (policy and value; reward after inverse RL)."""
-    if not (Path(run) / "networks" / "policy.json").exists():
-        raise FileNotFoundError(f"{run} has no exported networks (networks/policy.json)")
+    if not has_networks(Path(run) / "networks"):
+        raise FileNotFoundError(f"{run} has no exported networks (networks/policy.safetensors)")
     return load_networks(Path(run) / "networks")
 
 
