@@ -414,4 +414,4 @@ def _duration(seconds: float | None) -> str:
 
 
 # commands in their own modules register themselves on `app`
-from . import assess, cohort, poses, score, stops, sweep, trainee  # noqa: E402,F401
+from . import assess, cohort, datasets, poses, score, stops, sweep, trainee  # noqa: E402,F401
