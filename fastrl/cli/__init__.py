@@ -337,11 +337,20 @@ def eval_(
 
 
 @app.command()
-def view(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR", show_default=False)]) -> None:
+def view(
+    run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR", show_default=False)],
+    web: Annotated[bool, typer.Option("--web", help="serve RUN_DIR or SWEEP_DIR to a browser on localhost")] = False,
+    port: Annotated[int, typer.Option(help="with --web: the web viewer's port")] = 9090,
+) -> None:
     """Open a run's recording in the Rerun viewer (or say how, where there is no display)."""
     import os
     import shutil
     import subprocess
+
+    if web:
+        from .web import view_web
+
+        return view_web(run_dir, port)
 
     rrd = run_dir / "recording.rrd" if run_dir.is_dir() else run_dir
     if not rrd.exists():
@@ -354,7 +363,7 @@ def view(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR", show_default
         return
     out.print(
         f"no display here: copy {escape(str(rrd))} to a machine with a display and run `rerun {rrd.name}`, "
-        f"or serve it to a browser with `rerun --web-viewer {escape(str(rrd))}`"
+        f"or serve it to a browser with `fastrl view --web {escape(str(run_dir))}`"
     )
 
 
