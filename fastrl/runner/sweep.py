@@ -256,7 +256,8 @@ def _fit(sweep: Path, todo: list[dict], cpus: int) -> list[dict]:
     tuner = tune.Tuner(
         tune.with_resources(run_trial, {"cpu": cpus}),
         param_space={"trial": tune.grid_search(todo), "sweep": str(sweep), "cpus": cpus},
-        tune_config=tune.TuneConfig(trial_dirname_creator=lambda t: t.config["trial"]["name"]),
+        # reuse_actors: a worker keeps its imports (torch, SB3, MuJoCo) from one trial to the next
+        tune_config=tune.TuneConfig(trial_dirname_creator=lambda t: t.config["trial"]["name"], reuse_actors=True),
         run_config=tune.RunConfig(
             name=f"tune-{k}",
             storage_path=str(sweep),
