@@ -67,11 +67,14 @@ def sweep(
     runs: Annotated[Path, typer.Option("--runs", help="root folder of run directories")] = Path("runs"),
 ) -> None:
     """Run a grid of spec settings x seeds on Ray Tune; print and write the results table, best and figure."""
-    from ..runner.sweep import SweepError, create_sweep, parse_grid, parse_seeds, run_sweep
+    from ..runner.sweep import SweepError, create_sweep, parse_grid, parse_seeds, read_manifest, run_sweep
     from ..runner.sweep_table import write_results
 
     if (spec is None) == (resume is None):
         err.print("give a SPEC and --grid to start a sweep, or --resume SWEEP_DIR (not both)", markup=False)
+        raise typer.Exit(code=2)
+    if resume is not None and (grid or set_):
+        err.print("--resume runs the sweep's own grid and settings: drop --grid and --set", markup=False)
         raise typer.Exit(code=2)
     try:
         if resume is None:
@@ -85,6 +88,7 @@ def sweep(
             )
         else:
             folder = resume
+            read_manifest(folder)
         out.print(f"sweep folder {escape(str(folder))}")
         failed = run_sweep(folder, address, out)
     except (SpecError, SweepError, FileNotFoundError) as e:
