@@ -45,15 +45,17 @@ def machine() -> dict:
     }
 
 
-def serial(folder: Path, manifest: dict) -> float:
-    """The sweep's trials as ordinary runs one after another in this process; wall seconds."""
+def serial(folder: Path, manifest: dict) -> tuple[float, list[float]]:
+    """The sweep's trials as ordinary runs one after another in this process; wall seconds, total and per run."""
     quiet = Console(file=io.StringIO())
-    t0 = time.perf_counter()
+    t0, each = time.perf_counter(), []
     for trial in manifest["trials"]:
+        t1 = time.perf_counter()
         start_run(
             folder / "spec.yaml", trial_overrides(trial), console=quiet, progress=False, into=folder / trial["name"]
         )
-    return time.perf_counter() - t0
+        each.append(time.perf_counter() - t1)
+    return time.perf_counter() - t0, each
 
 
 def main() -> None:
@@ -72,7 +74,7 @@ def main() -> None:
         before = machine()
         print(f"machine: {before['cpu']}, {before['cores']} cores, load average {before['load_avg']}", flush=True)
         one_by_one = create_sweep(SPEC, base, grid, seeds, 1, root / "serial")
-        t_serial = serial(one_by_one, json.loads((one_by_one / "sweep.json").read_text()))
+        t_serial, serial_each = serial(one_by_one, json.loads((one_by_one / "sweep.json").read_text()))
         print(f"one after another: {t_serial:.1f} s", flush=True)
         swept = create_sweep(SPEC, base, grid, seeds, 1, root / "sweep")
         t0 = time.perf_counter()
@@ -83,6 +85,9 @@ def main() -> None:
         done = sum(r["seeds"] for r in summarize(swept)["rows"])
         print(f"fastrl sweep (Ray Tune, 1 CPU per trial): {t_sweep:.1f} s  ({done}/{n} trials finished)")
         print(f"speed-up: {t_serial / t_sweep:.2f}x  (load average after: {after['load_avg']})")
+        sweep_each = [t["wall_s"] for t in summarize(swept)["trials"] if t.get("wall_s") is not None]
+        alone, inside = sum(serial_each) / len(serial_each), sum(sweep_each) / max(len(sweep_each), 1)
+        print(f"per run: {alone:.1f} s one after another, {inside:.1f} s inside the sweep (two at a time)")
         result = {
             "runs": n,
             "grid": grid,
@@ -91,6 +96,8 @@ def main() -> None:
             "serial_s": t_serial,
             "sweep_s": t_sweep,
             "speedup": t_serial / t_sweep,
+            "serial_run_s": serial_each,
+            "sweep_trial_s": sweep_each,
             "failed": failed,
             "machine_before": before,
             "machine_after": after,

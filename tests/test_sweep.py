@@ -4,6 +4,7 @@ import json
 import os
 
 import pytest
+from safetensors import safe_open
 from typer.testing import CliRunner
 
 from fastrl.cli import app
@@ -80,6 +81,8 @@ def test_sweep_on_a_two_node_cluster_runs_trials_on_both_nodes(cluster, tmp_path
         assert json.loads((run / "meta.json").read_text())["status"] == "done"
         assert json.loads((run / "trial.json").read_text())["torch_threads"] == 1
         assert "1 file verified" in rrd_verify(run / "recording.rrd")
+        with safe_open(str(run / "networks" / "value.safetensors"), "pt") as f:  # a fresh run's standard file
+            assert json.loads(f.metadata()["fastrl"])["parts"]["v"][0]["type"] == "linear" and "v.0.weight" in f.keys()
     header = (folder / "results.csv").read_text().splitlines()[0]
     assert header.startswith("config,train.ppo.learning_rate,seeds,success_mean,success_sd")
     assert (folder / "results.png").stat().st_size > 10_000
