@@ -1,7 +1,6 @@
 """`fastrl sweep` on a real two-node Ray cluster (loopback): trials on both nodes, complete run dirs, retry, resume."""
 
 import json
-import os
 
 import pytest
 from safetensors import safe_open
@@ -13,8 +12,7 @@ from fastrl.runner.sweep import SweepError, create_sweep, parse_grid, plan, tria
 from .conftest import spec_file
 from .test_runner import TINY, rrd_verify
 
-ray = pytest.importorskip("ray")
-os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
+ray = pytest.importorskip("ray")  # on loopback only: tests/conftest.py sets RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0
 
 SWEEP_TINY = [*TINY, "train.timesteps=128"]
 
@@ -42,7 +40,9 @@ def node_ids(cluster) -> set[str]:
     """The node ids of a cluster, read through a short-lived driver connection."""
     ray.init(address=cluster.address, log_to_driver=False)
     try:
-        return {n["NodeID"] for n in ray.nodes() if n["Alive"]}
+        alive = [n for n in ray.nodes() if n["Alive"]]
+        assert {n["NodeManagerAddress"] for n in alive} == {"127.0.0.1"}, "the test cluster must stay on loopback"
+        return {n["NodeID"] for n in alive}
     finally:
         ray.shutdown()
 

@@ -186,11 +186,13 @@ def _ray_init(address: str | None, cpus: int) -> bool:
     Returns whether this call connected (and so should disconnect)."""
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
     os.environ.setdefault("RAY_AIR_NEW_OUTPUT", "0")  # the classic reporter: silent at verbose=0
+    address = address or os.environ.get("RAY_ADDRESS") or None
+    if not address:  # a local Ray talks over loopback only (else Ray picks the machine's network address)
+        os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
     try:
         import ray
     except ImportError:
         raise SweepError("fastrl sweep needs Ray Tune: pip install 'fastrl[sweep]'") from None
-    address = address or os.environ.get("RAY_ADDRESS") or None
     if ray.is_initialized():
         return False
     if address:
