@@ -3,10 +3,11 @@ safetensors files load without fastrl; an earlier version's .pt + .json pairs st
 
 import hashlib
 import json
+import re
 import shutil
 import subprocess
 import sys
-import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -434,36 +435,21 @@ def test_every_file_is_safetensors_with_its_description_in_the_header(exported):
     assert {"kind", "gamma", "absorbing", "absorbing_value"} <= set(reward) and reward["kind"] == "airl"
 
 
-# The README's lines: a value network evaluated with safetensors and torch alone (no fastrl).
-README_SNIPPET = """
-import json, torch
-from safetensors import safe_open
-from safetensors.torch import load_file
+# The README's lines: a value network evaluated with safetensors and torch alone (no fastrl), read from README.md.
+README = Path(__file__).resolve().parent.parent / "README.md"
 
-path = "networks/value.safetensors"
-w = load_file(path)
-with safe_open(path, "pt") as f:
-    meta = json.loads(f.metadata()["fastrl"])  # layers, observation normalisation, how parts combine
 
-def mlp(part, x):
-    for i, layer in enumerate(meta["parts"][part]):
-        if layer["type"] == "linear":
-            x = torch.nn.functional.linear(x, w[f"{part}.{i}.weight"], w.get(f"{part}.{i}.bias"))
-        else:
-            x = getattr(torch, layer["type"])(x)  # tanh, relu
-    return x
-
-norm = meta["obs_norm"]
-x = (obs - w["obs_norm.mean"]) / torch.sqrt(w["obs_norm.var"] + norm["epsilon"])
-value = mlp("v", x.clamp(-norm["clip"], norm["clip"]).float()).squeeze(-1)
-"""
+def readme_snippet() -> str:
+    """The README's python block that loads a network with safetensors."""
+    blocks = re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.S)
+    return next(b for b in blocks if "safetensors" in b)
 
 
 def test_the_readme_lines_evaluate_a_value_network_without_fastrl(exported, ppo_run, tmp_path):
     _, _, obs = ppo_run
     shutil.copytree(exported, tmp_path / "networks")
     np.save(tmp_path / "obs.npy", obs.astype(np.float64))
-    script = "import numpy, torch\nobs = torch.as_tensor(numpy.load('obs.npy'))\n" + textwrap.dedent(README_SNIPPET)
+    script = "import numpy, torch\nobs = torch.as_tensor(numpy.load('obs.npy'))\n" + readme_snippet()
     script += "\nimport sys\nassert not any(m.startswith('fastrl') for m in sys.modules)\n"
     script += "numpy.save('value.npy', value.numpy())\n"
     res = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=120)
