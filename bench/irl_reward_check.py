@@ -6,7 +6,7 @@
 
 For each run (GAIL or AIRL, with networks/ and checkpoints/): the untrained policy (same seed) and every saved
 checkpoint are rolled out deterministically on held-out seeds (20000, 20001, ...). Each rollout is scored by the
-spec's heuristic reward (w . phi) and by the learned reward saved in networks/reward.pt, loaded without pickle:
+spec's heuristic reward (w . phi) and by the learned reward saved in networks/ (safetensors), loaded without pickle:
 AIRL r_psi(s) (averaged over the copies saved during training, if the run saved them; --final: the final r_psi
 alone), GAIL log D - log(1 - D). Prints Spearman's rho over rollouts between the two returns read three ways:
 both discounted with the generator's gamma (the learned one with the absorbing tail if the episode ended in

@@ -87,7 +87,7 @@ def test_irl_learns_from_a_folder_without_actions(tmp_path, algorithm, keep, ext
     assert "skipped" not in res.output
     run = only_run(tmp_path / "runs")
     assert json.loads((run / "meta.json").read_text())["status"] == "done"
-    assert (run / "networks" / "policy.json").exists()
+    assert (run / "networks" / "policy.safetensors").exists()
     if algorithm == "airl" and not extra:  # the ranking prior came from a policy cloned from the recordings
         assert "irl/ranking_loss" in (run / "metrics.jsonl").read_text()
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from rich.console import Console
 
 from ..assess.scoring import Scorer, TrajectoryScores, foreign_problem
+from ..atomic import write_text
 from ..data.inverse import to_control_rate
 from ..data.recordings import load_recordings
 from ..data.trajectory import Trajectory, TrajectoryError
@@ -157,7 +158,7 @@ def run_protocol(
         "learned": str(learned),
         "scores": {k: str(v) for k, v in result.files.items()},
     }
-    (run / "protocol.json").write_text(json.dumps(summary, indent=2, default=float))
+    write_text(run / "protocol.json", json.dumps(summary, indent=2, default=float))
     update_meta(run, status="done")
     return Protocol(run, learned, rows, why, result, skipped)
 
