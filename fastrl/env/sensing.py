@@ -151,7 +151,8 @@ class DistanceGrid:
         self.n = int(round(2 * extent / cell)) + 1
         axis = self.x0 + cell * np.arange(self.n)
         gx, gy = np.meshgrid(axis, axis, indexing="ij")
-        dist, _ = cKDTree(dense).query(np.column_stack([gx.ravel(), gy.ravel()]))
+        # beyond the cap the query stops early and returns inf, which the cap replaces: the same grid, sooner
+        dist, _ = cKDTree(dense).query(np.column_stack([gx.ravel(), gy.ravel()]), distance_upper_bound=cap)
         self.grid = np.minimum(dist.reshape(self.n, self.n), cap).tolist()
 
     def __call__(self, x: float, y: float) -> float:
