@@ -1,14 +1,21 @@
 """Run stages: run directory, training with checkpoints, evaluation, recording."""
 
-from .run import evaluate_expert, evaluate_saved, resume_run, start_run
-from .stops import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
+from importlib import import_module
 
-__all__ = [
-    "EvaluationInterrupted",
-    "RunInterrupted",
-    "RunOutOfSpace",
-    "evaluate_expert",
-    "evaluate_saved",
-    "resume_run",
-    "start_run",
-]
+_FROM = {
+    "EvaluationInterrupted": ".stops",
+    "RunInterrupted": ".stops",
+    "RunOutOfSpace": ".stops",
+    "evaluate_expert": ".run",
+    "evaluate_saved": ".run",
+    "resume_run": ".run",
+    "start_run": ".run",
+}
+__all__ = sorted(_FROM)
+
+
+def __getattr__(name: str):
+    """Import the training stack on first use: `fastrl score` needs none of it."""
+    if name in _FROM:
+        return getattr(import_module(_FROM[name], __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
