@@ -1,11 +1,12 @@
-"""Where the wall time of a `fastrl run` goes: env stepping, learner, rendering, Rerun logging.
+"""Where the wall time of a `fastrl run` goes: env stepping, learner, rendering, Rerun logging, checkpoints.
 
     python bench/run_profile.py [--spec specs/tracelines.yaml] [--timesteps 50000] [--episodes 5]
 
 Runs the real runner (fastrl.runner.start_run) into a temporary runs folder with timers wrapped
 around the vectorised env's step, the evaluation env's step and render, and every RunRecorder
-call. The learner's share is the training time not spent stepping envs or logging. Reported,
-never asserted.
+call and every checkpoint save. The learner's share is the training time not spent stepping envs, logging
+or checkpointing. The last line is issue 29's budget: Rerun logging during training plus checkpoints (periodic
+and final) as a share of the training time, to stay under 5%. Reported, never asserted.
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ from pathlib import Path
 from fastrl.agents.sb3 import FreshInfoVecEnv
 from fastrl.env.fast_env import FastEnv
 from fastrl.log import RunRecorder
+from fastrl.runner import monitor as run_monitor
+from fastrl.runner import run as run_stage
 from fastrl.runner import start_run
 
 TIMERS: dict[str, float] = defaultdict(float)
@@ -83,6 +86,8 @@ def instrument() -> None:
         "close",
     ):
         setattr(RunRecorder, name, timed(f"logging: {name}", getattr(RunRecorder, name)))
+    run_monitor.save_checkpoint = timed("checkpointing: periodic (in training)", run_monitor.save_checkpoint)
+    run_stage.save_checkpoint = timed("checkpointing: last and final (after training)", run_stage.save_checkpoint)
 
 
 def main() -> None:
@@ -105,7 +110,11 @@ def main() -> None:
     logging = sum(v for k, v in TIMERS.items() if k.startswith("logging"))
     rows = dict(TIMERS)
     rows["train: learner and callbacks (rest of training)"] = (
-        train - TIMERS["train: env stepping (vec env)"] - TIMERS["logging: log_training"]
+        train
+        - TIMERS["train: env stepping (vec env)"]
+        - TIMERS["logging: log_training"]
+        - TIMERS["logging: log_training_columns"]
+        - TIMERS["checkpointing: periodic (in training)"]
     )
     print(
         f"fastrl run profile  {platform.processor() or platform.machine()}  {os.cpu_count()} cpus  "
@@ -122,6 +131,17 @@ def main() -> None:
         f"{(TIMERS['train: env stepping (vec env)'] + TIMERS['eval: env stepping']) / wall:7.1%}"
     )
     print(f"{'Rerun logging (all calls)':52s} {logging:9.2f} {logging / wall:7.1%}")
+    during = TIMERS["logging: log_training"] + TIMERS["logging: log_training_columns"]
+    periodic = TIMERS["checkpointing: periodic (in training)"]
+    saving = periodic + TIMERS["checkpointing: last and final (after training)"]
+    print(f"{'checkpoints (all saves)':52s} {saving:9.2f} {saving / wall:7.1%}")
+    print(
+        f"{'Rerun logging + checkpoints (issue 29: < 5%)':52s} {logging + saving:9.2f} {(logging + saving) / wall:7.1%}"
+    )
+    print(
+        f"{'  of which during training (curves, periodic saves)':52s} {during + periodic:9.2f} "
+        f"{(during + periodic) / train:7.1%} of training"
+    )
     if args.json:
         args.json.write_text(
             json.dumps({"wall": wall, "train_seconds": train, "parts": rows, "logging": logging}, indent=2)
