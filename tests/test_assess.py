@@ -4,18 +4,21 @@ import json
 
 import numpy as np
 import pytest
+import yaml
 from typer.testing import CliRunner
 
 from fastrl.agents.expert import ScriptedExpert
 from fastrl.assess.kinematic import deviation_by_progress, log_dimensionless_jerk, path_length
-from fastrl.assess.ranking import rank_correlations
-from fastrl.assess.references import reference_scores
+from fastrl.assess.ranking import _boot_kendall, _scipy_stats, _spearman, _stats, rank_correlations
+from fastrl.assess.references import compute_expert_paths, expert_paths, reference_scores
 from fastrl.assess.report import build_report, score_files
 from fastrl.assess.scoring import Scorer, normalise
 from fastrl.cli import app
 from fastrl.data.replay import expert_trajectories, replay, rollout_trajectory
 from fastrl.data.trajectory import Trajectory
 from fastrl.irl.networks import load_networks
+from fastrl.runner.assessment import assess
+from fastrl.runner.helper import Helper
 from fastrl.spec import load_spec
 
 from .conftest import spec_file
@@ -95,6 +98,29 @@ def test_ranking_of_constant_scores_is_undefined_not_a_crash():
     assert r["kendall_tau_b"] is None and r["spearman"] is None and not r["levels_in_order"]
 
 
+def test_statistics_and_p_values_equal_scipy_bit_for_bit():
+    rng = np.random.default_rng(3)
+    cases = [(rng.normal(size=n), rng.integers(1, 6, n).astype(float)) for n in (3, 8, 40, 100)]
+    cases += [(rng.integers(0, 4, 50).astype(float), rng.integers(1, 3, 50).astype(float))]  # ties on both sides
+    cases += [(np.ones(9), np.arange(9.0)), (np.arange(40.0), np.arange(40.0)), (rng.normal(size=50), -np.arange(50.0))]
+    for x, y in cases:
+        want, got = np.array(_scipy_stats(x, y), float), np.array(_stats(x, y), float)
+        np.testing.assert_array_equal(got, want)
+
+
+def test_batched_bootstrap_equals_scipy_on_every_resample_bit_for_bit():
+    rng = np.random.default_rng(7)
+    for n, tied in ((12, False), (30, True), (5, True)):
+        x = rng.integers(0, 3, n).astype(float) if tied else rng.normal(size=n)
+        y = rng.integers(1, 4, n).astype(float)
+        draws = rng.integers(0, n, (40, n))
+        draws[0] = 0  # a constant resample: both statistics undefined
+        want = np.array([_scipy_stats(x[i], y[i])[::2] for i in draws], float)
+        got = np.stack([_spearman(x[draws], y[draws]), _boot_kendall(x, y, draws)], axis=1)
+        assert np.isnan(got[0]).all()
+        np.testing.assert_array_equal(got, want)  # NaN where scipy's is, the same bits elsewhere
+
+
 # --- replay scores ------------------------------------------------------------------------------
 
 
@@ -115,6 +141,22 @@ def test_expert_outscores_a_noisy_expert_and_references_normalise_to_0_and_1(sco
     ref_expert = scorer.score(expert_trajectories(scorer.env, [90000])[0])
     normalise([ref_expert], refs)
     assert ref_expert.normalised["heuristic"] == pytest.approx(1.0)
+
+
+def test_expert_paths_from_the_cache_are_the_computed_ones(scorer, tmp_path):
+    cache = tmp_path / "expert_paths.npz"
+    first = expert_paths(scorer, [4, 2], cache)
+    assert sorted(first) == [2, 4] and cache.exists()
+    again = expert_paths(scorer, [2, 4, 6], cache)  # 2 and 4 read back, 6 computed and added
+    for seed in (2, 4):
+        np.testing.assert_array_equal(again[seed][0], first[seed][0])
+        np.testing.assert_array_equal(again[seed][1], first[seed][1])
+    fresh = expert_paths(scorer, [6])[6]
+    np.testing.assert_array_equal(again[6][1], fresh[1])
+    other = Scorer(_spec(extra=["episode.time_limit=9"]))  # another spec never reads this one's paths
+    expert_paths(other, [2], cache)
+    with np.load(cache) as z:
+        assert sorted(z.files) == ["spec_hash", "time_2", "tip_2"]
 
 
 def test_bad_and_foreign_files_are_reported_and_the_rest_scored(scorer, tmp_path):
@@ -206,6 +248,40 @@ def test_fastrl_score_with_a_run_writes_json_csv_figures_and_a_valid_recording(a
     assert any(e.startswith("/world/assessment/") for e in entities)
     assert any(e.startswith("/assessment/deviation/") for e in entities)
     assert (airl_run / "assessment" / "references.json").exists()  # cached for the next scoring
+
+
+def test_scoring_in_two_processes_gives_the_same_report_in_the_same_order(scorer, tmp_path):
+    for i, (level, noise) in enumerate(((2, 0.0), (1, 0.7), (2, 0.1), (1, 0.5))):
+        degraded(scorer, 10 + i, noise, level).save(tmp_path / "in" / f"t{i}.npz")
+    (tmp_path / "in" / "t1b.npz").write_bytes(b"broken")  # a problem between the two halves keeps its place
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(yaml.safe_dump(scorer.spec.model_dump(mode="json")))
+    reports = []
+    for parallel in (False, True):
+        out = tmp_path / f"out-{parallel}" / "scores.json"
+        result = assess(
+            [tmp_path / "in"],
+            spec_path=spec,
+            output=out,
+            reference_episodes=1,
+            progress=False,
+            parallel=parallel,
+        )
+        assert {"paths", "deviation", "distributions", "rrd"} <= set(result.files)
+        reports.append({k: v for k, v in json.loads(out.read_text()).items() if k != "seconds"})
+    assert reports[0] == reports[1] and [r["file"] for r in reports[1]["trajectories"]] == ["t0", "t1", "t2", "t3"]
+    assert len(reports[1]["problems"]) == 1 and "t1b.npz" in reports[1]["problems"][0]
+
+
+def test_expert_paths_from_the_helper_process_are_the_ones_computed_here(scorer):
+    helper = Helper(scorer)
+    try:
+        shared = helper.expert_paths([7, 8, 9])  # 7 in the worker, 8 and 9 here
+    finally:
+        helper.close()
+    for seed, (t, tip) in compute_expert_paths(scorer, [7, 8, 9]).items():
+        np.testing.assert_array_equal(shared[seed][0], t)
+        np.testing.assert_array_equal(shared[seed][1], tip)
 
 
 def test_fastrl_score_needs_a_run_or_a_spec(tmp_path):

@@ -39,6 +39,7 @@ def deviations(scored: list[TrajectoryScores], reference: dict) -> dict[str, np.
 def plot_paths(scored: list[TrajectoryScores], by: str, path: Path, radius: float) -> Path:
     """Fig. 6: tip paths projected on the dome's XY plane, coloured by learned value (or by time)."""
     plt = _pyplot()
+    from matplotlib.collections import LineCollection
 
     groups = list(_groups(scored, by).items())[:MAX_PANELS]
     fig, axes = plt.subplots(1, len(groups), figsize=(3.3 * len(groups), 3.6), squeeze=False, sharex=True, sharey=True)
@@ -47,24 +48,25 @@ def plot_paths(scored: list[TrajectoryScores], by: str, path: Path, radius: floa
     with_values = [s.values for s in scored if s.values is not None]
     lo, hi = np.percentile(np.concatenate(with_values), [5, 95]) if with_values else (0.0, 1.0)
     sc = None
-    for ax, (name, members) in zip(axes[0], groups):
+    for ax, (name, members) in zip(axes[0], groups):  # one artist per kind and panel, not per trajectory
         ax.add_patch(plt.Circle((0, 0), radius * 1000, fill=False, color="0.6", lw=1))
-        for s in members:
-            xy = s.tip[:, :2] * 1000
-            ax.plot(xy[:, 0], xy[:, 1], color="0.8", lw=0.5, zorder=1)
-            colour = s.values if s.values is not None else s.time
-            sc = ax.scatter(
-                xy[:, 0],
-                xy[:, 1],
-                c=colour,
-                s=3,
-                cmap="viridis",
-                vmin=lo if s.values is not None else None,
-                vmax=hi if s.values is not None else None,
-                zorder=2,
-            )
-            ax.scatter(*xy[0], marker="*", s=60, color="k", zorder=3)
-            ax.scatter(*xy[-1], marker="*", s=60, color="tab:red", zorder=3)
+        xys = [s.tip[:, :2] * 1000 for s in members]
+        ax.add_collection(LineCollection(xys, colors="0.8", linewidths=0.5, zorder=1))
+        learned = members[0].values is not None
+        colour = np.concatenate([s.values if learned else s.time for s in members])
+        points = np.concatenate(xys)
+        sc = ax.scatter(
+            points[:, 0],
+            points[:, 1],
+            c=colour,
+            s=3,
+            cmap="viridis",
+            vmin=lo if learned else None,
+            vmax=hi if learned else None,
+            zorder=2,
+        )
+        ax.scatter(*np.array([xy[0] for xy in xys]).T, marker="*", s=60, color="k", zorder=3)
+        ax.scatter(*np.array([xy[-1] for xy in xys]).T, marker="*", s=60, color="tab:red", zorder=3)
         ax.set(title=f"{name} (n={len(members)})", xlabel="x (mm)", aspect="equal", xlim=(x0, x1), ylim=(y0, y1))
     axes[0][0].set_ylabel("y (mm)")
     if sc is not None:
@@ -111,8 +113,9 @@ def plot_distributions(report: dict, path: Path) -> Path:
     for ax, k in zip(axes[0], keys):
         data = [[r[k] for r in rows if label(r) == n and r[k] is not None] for n in names]
         ax.boxplot(data, showfliers=False)
-        for i, d in enumerate(data, start=1):
-            ax.scatter(np.full(len(d), i) + np.linspace(-0.15, 0.15, len(d)), d, s=6, alpha=0.6)
+        x = [np.full(len(d), i) + np.linspace(-0.15, 0.15, len(d)) for i, d in enumerate(data, start=1)]
+        cycle = [f"C{i % 10}" for i, d in enumerate(data) for _ in d]  # each group its colour, in one artist
+        ax.scatter(np.concatenate(x), np.concatenate([np.asarray(d, float) for d in data]), s=6, alpha=0.6, c=cycle)
         ax.set_xticks(range(1, len(names) + 1), names, rotation=45, fontsize=7)
         rank = report["ranking"].get(k)
         ax.set_title(
@@ -120,7 +123,15 @@ def plot_distributions(report: dict, path: Path) -> Path:
             fontsize=9,
         )
     fig.tight_layout()
-    return _save(fig, path)
+    return _save(fig, path, tight=False)  # tight_layout has fitted it: a tight bounding box would lay it out twice
+
+
+def draw_path_figures(scored: list[TrajectoryScores], devs: dict, by: str, paths: dict, radius: float) -> dict:
+    """The paths-by-value and deviation PNGs (they need no report), each drawn once; their paths by kind."""
+    return {
+        "paths": plot_paths(scored, by, paths["paths"], radius),
+        "deviation": plot_deviation(scored, devs, by, paths["deviation"]),
+    }
 
 
 def _pyplot():
@@ -133,12 +144,12 @@ def _pyplot():
     return plt
 
 
-def _save(fig, path: Path) -> Path:
-    """Write and close a figure."""
+def _save(fig, path: Path, tight: bool = True) -> Path:
+    """Write and close a figure (cropped to what it draws if `tight`)."""
     plt = _pyplot()
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+    fig.savefig(path, dpi=110, bbox_inches="tight" if tight else None)
     plt.close(fig)
     return path

@@ -4,12 +4,15 @@ learned from recordings, the mean of those recordings (1)."""
 from __future__ import annotations
 
 import json
+import zipfile
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
+from ..atomic import atomic_write
 from ..data.replay import expert_trajectories, rollout_trajectory
-from ..spec import task_hash
+from ..spec import spec_hash, task_hash
 from .scoring import NORMALISED, Scorer
 
 REFERENCE_SEED = 90000  # held-out seeds, apart from training (0..), evaluation (10000..) and checks (20000..)
@@ -80,17 +83,61 @@ def _reward_identity(scorer: Scorer) -> str | None:
     return None if nets is None else getattr(nets, "identity", None)
 
 
-def expert_paths(scorer: Scorer, seeds, recordings: list | None = None) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+def expert_paths(
+    scorer: Scorer,
+    seeds,
+    cache: Path | None = None,
+    compute: Callable | None = None,
+    recordings: list | None = None,
+) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """The scripted expert's (time, tip path) on each seed: the reference a trainee deviates from. With
-    `recordings` (best first), the best recording on that seed, else the best of all, instead."""
-    out = {}
+    `recordings` (best first), the best recording on that seed, else the best of all, instead.
+
+    With `cache` (an .npz), the expert's paths already computed for this spec are read from it and new ones added
+    to it. `compute(seeds)` computes the missing ones (default: compute_expert_paths with this scorer)."""
+    wanted = sorted(set(int(s) for s in seeds))
     if recordings is not None:
-        for seed in sorted(set(int(s) for s in seeds)):
-            same = [t for t in recordings if int(t.meta.get("seed", 0)) == seed]
-            traj = (same or recordings)[0]
-            out[seed] = (traj.time - traj.time[0], scorer.tip_path(traj.portal))
-        return out
-    for seed in sorted(set(int(s) for s in seeds)):
-        traj = expert_trajectories(scorer.env, [seed])[0]
-        out[seed] = (traj.time - traj.time[0], scorer.tip_path(traj.portal))
+        return {seed: recorded_path(scorer, seed, recordings) for seed in wanted}
+    key = spec_hash(scorer.spec)
+    out = _read_paths(cache, key) if cache is not None else {}
+    missing = [s for s in wanted if s not in out]
+    if missing:
+        out |= (compute or (lambda s: compute_expert_paths(scorer, s)))(missing)
+    if cache is not None and missing:
+        _write_paths(cache, key, out)
+    return {s: out[s] for s in wanted}
+
+
+def recorded_path(scorer: Scorer, seed: int, recordings: list) -> tuple[np.ndarray, np.ndarray]:
+    """(time from 0, tip path) of the best recording on `seed`, else of the best of all."""
+    traj = ([t for t in recordings if int(t.meta.get("seed", 0)) == seed] or recordings)[0]
+    return traj.time - traj.time[0], scorer.tip_path(traj.portal)
+
+
+def compute_expert_paths(scorer: Scorer, seeds) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Roll the scripted expert out on each seed: (time from 0, tip path)."""
+    out = {}
+    for seed in seeds:
+        traj = expert_trajectories(scorer.env, [int(seed)])[0]
+        out[int(seed)] = (traj.time - traj.time[0], scorer.tip_path(traj.portal))
     return out
+
+
+def _read_paths(cache: Path, key: str) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Expert paths saved for the spec with hash `key`; none if the file is missing, broken or another spec's."""
+    try:
+        with np.load(cache, allow_pickle=False) as z:
+            if str(z["spec_hash"]) != key:
+                return {}
+            return {int(n[5:]): (z[n], z["tip_" + n[5:]]) for n in z.files if n.startswith("time_")}
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):  # missing or broken: recomputed
+        return {}
+
+
+def _write_paths(cache: Path, key: str, paths: dict[int, tuple[np.ndarray, np.ndarray]]) -> None:
+    """Save expert paths beside the spec hash, atomically (a reader never sees half a file)."""
+    arrays = {"spec_hash": np.array(key)}
+    for seed, (t, tip) in paths.items():
+        arrays[f"time_{seed}"], arrays[f"tip_{seed}"] = t, tip
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(cache, lambda f: np.savez(f, **arrays))

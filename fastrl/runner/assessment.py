@@ -4,20 +4,22 @@ from __future__ import annotations
 
 import json
 import time
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..assess.figures import deviations, group_of, plot_deviation, plot_distributions, plot_paths
+from ..assess.figures import deviations, draw_path_figures, group_of, plot_distributions
 from ..assess.references import expert_paths, reference_scores
-from ..assess.report import build_report, csv_text, score_files, trajectory_files
+from ..assess.report import build_report, csv_text, group_key, row, score_files, trajectory_files
 from ..assess.scoring import Scorer, normalise
 from ..data.recordings import load_recordings
 from ..irl.networks import has_networks, load_networks
 from ..log.assessment import log_assessment
 from ..spec import load_spec
+from .helper import WORKER_SHARE, Helper, split_by_size
 
 
 @dataclass
@@ -81,65 +83,84 @@ def assess(
     pictures: bool = True,
     console: Console | None = None,
     progress: bool = True,
+    parallel: bool | None = None,
 ) -> Assessment:
-    """Score every trajectory file under `inputs` and write the report and its pictures."""
+    """Score every trajectory file under `inputs` and write the report and its pictures.
+
+    `parallel`: score and draw in a second, forked process (None: when there are enough files and a second core)."""
     console = console or Console(stderr=True)
+    t0 = time.perf_counter()
     scorer, recording_id = load_scorer(run, spec_path)
-    paths, seconds = outputs_for(output, run), {}
+    paths, seconds = outputs_for(output, run), {"load": time.perf_counter() - t0}
     t0 = time.perf_counter()
     cache = run / "assessment" / "references.json" if run is not None else None
     recordings = learned_from(scorer)
     references = reference_scores(scorer, reference_episodes, cache, recordings)
     seconds["references"] = time.perf_counter() - t0
     files = trajectory_files(inputs)
-    t0 = time.perf_counter()
-    with Progress(
-        TextColumn("scoring"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn(),
-        console=console,
-        disable=not progress,
-        transient=True,
-    ) as bar:
-        task = bar.add_task("score", total=len(files))
-        scored, problems = score_files(scorer, files, on_file=lambda _f: bar.advance(task))
-    normalise(scored, references)
-    seconds["scoring"] = time.perf_counter() - t0
-    report = build_report(scored, references, problems, scorer.learned)
-    if recordings is not None:  # 1 is the recordings learned from, not the scripted expert
-        report["normalisation"] = report["normalisation"].replace("scripted expert", "recordings learned from")
-        report["warnings"] = [w.replace("scripted expert", "recordings learned from") for w in report["warnings"]]
-    report["seconds"] = seconds
-    result = Assessment(report, {}, seconds)
-    paths["json"].parent.mkdir(parents=True, exist_ok=True)
-    paths["csv"].write_text(csv_text(report))
-    result.files["csv"] = paths["csv"]
-    if pictures and scored:
+    helper = Helper(scorer) if Helper.worth_it(len(files)) and parallel is not False or parallel else None
+    try:
         t0 = time.perf_counter()
-        rid = recording_id or f"assessment-{scorer.spec.name}"
-        _pictures(scorer, scored, report, paths, rid, result, recordings)
-        seconds["pictures"] = time.perf_counter() - t0
+        with Progress(
+            TextColumn("scoring"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+            console=console,
+            disable=not progress,
+            transient=True,
+        ) as bar:
+            task = bar.add_task("score", total=len(files))
+            cut = split_by_size(files, WORKER_SHARE) if helper else 0  # the worker: files[:cut]
+            theirs = helper.score(files[:cut], warm=pictures) if helper else None
+            scored, problems = score_files(scorer, files[cut:], on_file=lambda _f: bar.advance(task))
+            if theirs is not None:
+                first, first_problems = theirs.result()
+                scored, problems = first + scored, first_problems + problems
+                bar.advance(task, cut)
+        normalise(scored, references)
+        seconds["scoring"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        drawing = pictures and bool(scored)
+        if drawing:  # the path and deviation figures need no report: they start first
+            expert_cache = run / "assessment" / "expert_paths.npz" if run is not None else None
+            by = group_key([row(s) for s in scored])
+            seeds = [s.meta.get("seed", 0) for s in scored]
+            compute = helper and helper.expert_paths
+            devs = deviations(scored, expert_paths(scorer, seeds, expert_cache, compute, recordings))
+            radius = scorer.spec.scene.radius
+            early = _run(helper, draw_path_figures, scored, devs, by, paths, radius)
+            seconds["pictures"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        report = build_report(scored, references, problems, scorer.learned)
+        if recordings is not None:  # 1 is the recordings learned from, not the scripted expert
+            report["normalisation"] = report["normalisation"].replace("scripted expert", "recordings learned from")
+            report["warnings"] = [w.replace("scripted expert", "recordings learned from") for w in report["warnings"]]
+        seconds["report"] = time.perf_counter() - t0
+        report["seconds"] = seconds
+        result = Assessment(report, {}, seconds)
+        paths["json"].parent.mkdir(parents=True, exist_ok=True)
+        paths["csv"].write_text(csv_text(report))
+        result.files["csv"] = paths["csv"]
+        if drawing:  # the distributions figure in the helper too while this process writes the recording
+            t0 = time.perf_counter()
+            late = _run(helper, plot_distributions, report, paths["distributions"])
+            rid = recording_id or f"assessment-{scorer.spec.name}"
+            rrd = log_assessment(paths["rrd"], rid, scorer.env.task, scored, report, devs, lambda s: group_of(s, by))
+            result.files |= early.result() | {"distributions": late.result(), "rrd": rrd}
+            seconds["pictures"] += time.perf_counter() - t0
+    finally:
+        if helper is not None:
+            helper.close()
     paths["json"].write_text(json.dumps(report, indent=2, default=float))
     result.files["json"] = paths["json"]
     return result
 
 
-def _pictures(
-    scorer: Scorer,
-    scored,
-    report: dict,
-    paths: dict[str, Path],
-    recording_id: str,
-    result: Assessment,
-    recordings: list | None = None,
-) -> None:
-    """PNG figures and the Rerun recording of the assessment."""
-    by = report["grouped_by"]
-    devs = deviations(scored, expert_paths(scorer, [s.meta.get("seed", 0) for s in scored], recordings))
-    result.files["paths"] = plot_paths(scored, by, paths["paths"], scorer.spec.scene.radius)
-    result.files["deviation"] = plot_deviation(scored, devs, by, paths["deviation"])
-    result.files["distributions"] = plot_distributions(report, paths["distributions"])
-    result.files["rrd"] = log_assessment(
-        paths["rrd"], recording_id, scorer.env.task, scored, report, devs, lambda s: group_of(s, by)
-    )
+def _run(helper: Helper | None, fn, *args) -> Future:
+    """fn(*args) in the helper process, or here and now (a finished future)."""
+    if helper is not None:
+        return helper.submit(fn, *args)
+    done: Future = Future()
+    done.set_result(fn(*args))
+    return done
