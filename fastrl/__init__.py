@@ -18,6 +18,7 @@ TASK_IDS = {
     "Periscoping": "periscoping",
     "TraceLines": "tracelines",
     "LiverTour": "liver_tour",
+    "Triangulation": "triangulation",
 }
 
 

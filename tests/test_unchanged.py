@@ -1,4 +1,4 @@
-"""Instruments change nothing for the bundled specs: main's rollouts, models and hashes, and explicit no-instrument specs."""
+"""Instruments change nothing for the bundled specs: main's rollouts, models and hashes; `instruments: []` alike."""
 
 from pathlib import Path
 

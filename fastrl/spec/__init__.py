@@ -30,7 +30,9 @@ def spec_hash(spec: TaskSpec) -> str:
 
 def task_hash(spec: TaskSpec) -> str:
     """SHA-256 of what a trajectory's replay depends on: scene, scope, task and episode (16 hex digits)."""
-    world = spec.model_dump(mode="json", include={"scene", "scope", "task", "episode"})
+    world = spec.model_dump(mode="json", include={"scene", "scope", "task", "episode", "instruments"})
+    if not world["instruments"]:
+        del world["instruments"]  # specs without instruments keep the hash they had before instruments existed
     text = json.dumps(world, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 

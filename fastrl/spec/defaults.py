@@ -47,6 +47,8 @@ def canonical_dump(spec) -> dict:
     """The spec as JSON data with every algorithm-dependent field that holds its default written as null, so a spec
     hashes the same whether it was resolved or not (old runs and trajectories keep their spec_hash)."""
     data = spec.model_dump(mode="json")
+    if not data["instruments"]:
+        del data["instruments"]  # specs without instruments keep the hash they had before instruments existed
     for path, value in algorithm_defaults(spec).items():
         node = data
         for name in path[:-1]:

@@ -14,6 +14,7 @@ from .anatomy import landmark_pose
 from .base import NonNeg, Pos, Strict, _fail, _raise
 from .defaults import resolve_defaults
 from .experiment import Experiment
+from .instruments import Instrument, instrument_errors
 from .irl import IRL
 from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_SECONDS, MAX_SUBTASKS
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
@@ -113,7 +114,7 @@ class Landmark(Strict):
 class Task(Strict):
     """Which task, its avatars, line or landmarks, and the default cue."""
 
-    kind: Literal["image_centring", "periscoping", "trace_lines", "liver_tour"]
+    kind: Literal["image_centring", "periscoping", "trace_lines", "liver_tour", "triangulation", "loose_bodies"]
     avatars: list[Avatar] = Field([], max_length=MAX_SUBTASKS)
     line: Line | None = None
     landmarks: list[Landmark] = Field([], max_length=MAX_SUBTASKS)
@@ -256,6 +257,7 @@ class TaskSpec(Strict):
     description: str = ""
     scene: Scene
     scope: Scope
+    instruments: list[Instrument] = Field([], max_length=4, description="probes and graspers besides the scope")
     task: Task
     episode: Episode = Episode()
     actions: Actions = Actions()
@@ -302,7 +304,7 @@ class TaskSpec(Strict):
                         lm.organ,
                     )
                 )
-        _raise(errors)
+        _raise(errors + instrument_errors(self))
         for i, av in enumerate(self.task.avatars):
             problem = self.avatar_problem(av)
             if problem:
