@@ -19,6 +19,7 @@ TASK_IDS = {
     "TraceLines": "tracelines",
     "LiverTour": "liver_tour",
     "Triangulation": "triangulation",
+    "LooseBodies": "loose_bodies",
 }
 
 

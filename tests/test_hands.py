@@ -98,3 +98,24 @@ def test_instruments_enter_the_hashes():
     a = load_spec(spec_file("triangulation"))
     b = load_spec(spec_file("triangulation"), ["instruments.0.touch=0.005"])
     assert task_hash(a) != task_hash(b) and spec_hash(a) != spec_hash(b)
+
+
+def test_triangulation_trajectories_keep_the_probe_and_replay_identically(tmp_path):
+    from fastrl.data.replay import replay, rollout_trajectory
+    from fastrl.data.trajectory import Trajectory
+
+    env = fastrl.make(spec_file("triangulation"))
+    expert = ScriptedExpert(env)
+    traj, observations = rollout_trajectory(env, expert.act, 4, {"source": "expert"}, expert.reset)
+    assert traj.instruments.shape == (len(traj.time), 4)
+    assert np.ptp(traj.instruments[:, 2]) > 0.02  # the probe went in and out
+    loaded = Trajectory.load(traj.save(tmp_path / "t.npz"))
+    np.testing.assert_array_equal(loaded.instruments, traj.instruments)
+    replayed, infos, _ = replay(fastrl.make(spec_file("triangulation")), loaded)
+    np.testing.assert_allclose(replayed, observations, atol=1e-9)
+    assert infos[-1]["success"]
+    scope_only = Trajectory(loaded.time, loaded.portal, loaded.meta)  # a file from before instruments: still loads
+    _, infos, _ = replay(
+        fastrl.make(spec_file("triangulation")), Trajectory.load(scope_only.save(tmp_path / "old.npz"))
+    )
+    assert not infos[-1]["success"]  # the probe stays at its start: the view alone completes nothing

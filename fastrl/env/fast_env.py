@@ -16,6 +16,7 @@ from ..spec.models import TaskSpec
 from ..terms import OBSERVATION_TERMS, REWARD_FEATURES, TaskState
 from .actions import ContinuousActions, DiscreteActions, RateActions
 from .cues import cue_checks, cue_green, update_dwell
+from .loose_sensing import LooseBodies
 from .sensing import Sensor
 from .tool_actions import ToolActions
 from .tool_sensing import ToolSensor, place_tools, tool_start
@@ -44,6 +45,7 @@ class FastEnv(gym.Env):
         else:
             self.actions = ContinuousActions(spec.actions, ranges, self.dt, self.model.body("scope_optics").id)
         self.tools = ToolSensor(self.task) if self.task.instruments else None
+        self.loose = LooseBodies(self.task) if spec.task.bodies else None
         if self.tools is not None:
             self.actions = ToolActions(self.actions, spec.actions, self.task.instruments, self.dt)
         self.action_space = self.actions.space
@@ -84,6 +86,8 @@ class FastEnv(gym.Env):
         if q0 is None:
             q0 = self._start_pose()
         self.steps, self.done_count, self.elapsed = 0, 0, 0.0
+        if self.loose is not None:
+            self.loose.reset(self.data)
         self._place(np.asarray(q0, float))
         if self.tools is not None:
             tq = options.get("instruments")
@@ -286,9 +290,14 @@ class FastEnv(gym.Env):
 
     def _read(self, first: bool) -> None:
         """Read the scope (and instruments) into the task state."""
+        k = min(self.done_count, len(self.t_pos) - 1)
+        if self.loose is not None:
+            self.loose.update(self, k)
         self.sensor.read(self.state, self.model, self.data, first=first)
         if self.tools is not None:
             self.tools.read(self.state, self.model, self.data, first=first)
+        if self.loose is not None:
+            self.state.tool_ok = self.loose.done(self.state, self.data, k)
 
     def _start_pose(self) -> np.ndarray:
         """The spec's start pose plus its uniform noise."""

@@ -21,6 +21,7 @@ class ToolSensor:
         self.task = task
         self.tool = task.instruments[0]
         self.tips = {t.tip_geom for t in task.instruments}
+        self.scope_tip = task.tip_geom
         self.touch = self.tool.spec.touch
         self.target_radius = task.targets.size
         self.half_fov = math.radians(0.5 * task.spec.scope.fov_deg)
@@ -47,13 +48,13 @@ class ToolSensor:
         s.tool_to_target, s.tool_distance = d, norm(d)
         s.tool_touching = s.tool_distance <= self.touch
         scope = bad = 0
-        for c in data.contact[: data.ncon]:
-            if c.geom1 not in self.tips and c.geom2 not in self.tips:
-                scope += 1
-                continue
-            on_target = norm((c.pos[0] - t[0], c.pos[1] - t[1], c.pos[2] - t[2])) <= self.target_radius
-            ours = self.tool.tip_geom in (c.geom1, c.geom2)
-            bad += 0 if ours and on_target else 1
+        if data.ncon:  # (slicing the contacts costs more than the rest of the step: only when there are some)
+            for (g1, g2), (x, y, z) in zip(data.contact.geom.tolist(), data.contact.pos.tolist()):
+                if g1 not in self.tips and g2 not in self.tips:
+                    scope += 1 if self.scope_tip in (g1, g2) else 0  # loose bodies resting: no event
+                    continue
+                on_target = norm((x - t[0], y - t[1], z - t[2])) <= self.target_radius
+                bad += 0 if self.tool.tip_geom in (g1, g2) and on_target else 1
         s.tool_contacts, s.contacts = bad, scope + bad
         e = (p[0] - s.cam_pos[0], p[1] - s.cam_pos[1], p[2] - s.cam_pos[2])
         s.tool_in_view = dot(e, s.cam_fwd) > math.cos(self.half_fov) * max(norm(e), 1e-9)

@@ -12,6 +12,7 @@ from ..spec.models import TaskSpec
 from .abdomen import build_abdomen
 from .dome import build_dome
 from .instruments import InstrumentHandles, build_instrument, instrument_handles
+from .loose import build_loose
 from .scope import JOINTS, build_scope, joint_ranges
 from .targets import Targets, build_targets, resolve_targets
 
@@ -69,6 +70,8 @@ def build_mjspec(task_spec: TaskSpec) -> tuple[mujoco.MjSpec, dict]:
         build_instrument(spec, inst, *portals[inst.portal])
     targets = resolve_targets(task_spec)
     build_targets(spec, targets, task_spec.task.line.width if task_spec.task.line else 0.0015)
+    if task_spec.task.bodies:
+        build_loose(spec, task_spec)
     return spec, portals
 
 

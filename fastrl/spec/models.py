@@ -17,6 +17,7 @@ from .experiment import Experiment
 from .instruments import Instrument, instrument_errors
 from .irl import IRL
 from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_SECONDS, MAX_SUBTASKS
+from .loose import Cup, LooseBody, loose_errors
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
 from .training import Evaluate, Train
 
@@ -118,6 +119,8 @@ class Task(Strict):
     avatars: list[Avatar] = Field([], max_length=MAX_SUBTASKS)
     line: Line | None = None
     landmarks: list[Landmark] = Field([], max_length=MAX_SUBTASKS)
+    bodies: list[LooseBody] = Field([], max_length=MAX_SUBTASKS, description="loose_bodies: what to grasp")
+    cup: Cup | None = Field(None, description="loose_bodies: where to drop them")
     cue: Cue = Cue()
     jitter: tuple[NonNeg, NonNeg] = Field(
         (0.0, 0.0), description="random avatar offset at reset: metres on the plate, degrees on the dome"
@@ -137,7 +140,7 @@ class Task(Strict):
                 raise ValueError("liver_tour needs at least one landmark")
             if self.avatars or self.line is not None or any(self.jitter):
                 raise ValueError("liver_tour has landmarks fixed to the anatomy: no avatars, line or jitter")
-        elif self.kind != "trace_lines" and not self.avatars:
+        elif self.kind not in ("trace_lines", "loose_bodies") and not self.avatars:
             raise ValueError(f"{self.kind} needs at least one avatar")
         return self
 
@@ -304,7 +307,7 @@ class TaskSpec(Strict):
                         lm.organ,
                     )
                 )
-        _raise(errors + instrument_errors(self))
+        _raise(errors + instrument_errors(self) + loose_errors(self))
         for i, av in enumerate(self.task.avatars):
             problem = self.avatar_problem(av)
             if problem:
