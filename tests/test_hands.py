@@ -119,3 +119,16 @@ def test_triangulation_trajectories_keep_the_probe_and_replay_identically(tmp_pa
         fastrl.make(spec_file("triangulation")), Trajectory.load(scope_only.save(tmp_path / "old.npz"))
     )
     assert not infos[-1]["success"]  # the probe stays at its start: the view alone completes nothing
+
+
+def test_a_two_handed_cohort_ranks_by_level():
+    from fastrl.data.cohort import make_cohort, replayed_figures
+
+    spec = load_spec(spec_file("triangulation"))
+    env = fastrl.make(spec)
+    trajs = list(make_cohort(spec, levels=3, per_level=2, seed=0, env=env.unwrapped))
+    assert all(t.instruments is not None and t.instruments.shape[1] == 4 for t in trajs)
+    figures = [replayed_figures(env, t) for t in trajs]
+    by_level = {lv: np.mean([f["return"] for f, t in zip(figures, trajs) if t.meta["skill"] == lv]) for lv in (1, 2, 3)}
+    assert by_level[1] < by_level[2] < by_level[3], by_level
+    assert all(f["subtasks"] == 5 for f, t in zip(figures, trajs) if t.meta["skill"] == 3)  # level 3: the expert
