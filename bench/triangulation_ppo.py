@@ -1,6 +1,6 @@
 """PPO on the heuristic reward of the two-handed triangulation task: steps and wall time to 90% of the subtasks.
 
-    python bench/triangulation_ppo.py [--cap 1600000] [--seed 0] [--root runs/bench-hands]
+    python bench/triangulation_ppo.py [--cap 2000000] [--seed 0] [--root runs/bench-hands]
 
 One real `fastrl run` with a deterministic evaluation (10 seeds) every 100k steps, stopped early once an evaluation
 completes 95% of the subtasks; prints the machine, the load, the curve, the first evaluation at >= 90% (steps,
@@ -24,7 +24,7 @@ def main() -> None:
     """Train, then report."""
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--spec", default="specs/triangulation.yaml")
-    p.add_argument("--cap", type=int, default=1_600_000)
+    p.add_argument("--cap", type=int, default=2_000_000)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--root", default="runs/bench-hands")
     args = p.parse_args()
