@@ -132,3 +132,26 @@ def test_a_two_handed_cohort_ranks_by_level():
     by_level = {lv: np.mean([f["return"] for f, t in zip(figures, trajs) if t.meta["skill"] == lv]) for lv in (1, 2, 3)}
     assert by_level[1] < by_level[2] < by_level[3], by_level
     assert all(f["subtasks"] == 5 for f, t in zip(figures, trajs) if t.meta["skill"] == 3)  # level 3: the expert
+
+
+def test_teleop_tab_switches_to_the_probe_and_the_attempt_keeps_it(tmp_path):
+    import time
+
+    from fastrl.data.trajectory import Trajectory
+    from fastrl.teleop.session import Session
+
+    s = Session(load_spec(spec_file("triangulation")), "two", tmp_path / "a.npz")
+    s.start()
+    t = time.monotonic()
+    s.on_key(267)  # PageDown: the scope retracts
+    s.tick(t)
+    s.on_key(258)  # Tab: the probe
+    s.on_key(266)  # PageUp: the probe goes in
+    for i in range(1, 6):
+        s.tick(t + 0.05 * i)
+    assert s.writer.actions[:2] == [6, 11 + 4]  # scope retract, then the probe's insert
+    s.on_key(256)
+    s.tick()
+    assert s.finish()
+    traj = Trajectory.load(tmp_path / "a.npz")
+    assert traj.instruments.shape == (len(traj.time), 4) and traj.instruments[-1, 2] > traj.instruments[0, 2]

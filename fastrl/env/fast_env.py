@@ -173,7 +173,7 @@ class FastEnv(gym.Env):
 
     def hold_here(self) -> None:
         """Servo targets to the current pose: the scope stays where an outside force (a mouse pull) left it."""
-        self.target = self.portal_coordinates().tolist()
+        self.target = self.portal_coordinates().tolist() + self.target[5:]
 
     def observation(self) -> np.ndarray:
         """The current observation, without advancing the frame stack."""
