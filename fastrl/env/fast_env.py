@@ -298,6 +298,7 @@ class FastEnv(gym.Env):
             self.tools.read(self.state, self.model, self.data, first=first)
         if self.loose is not None:
             self.state.tool_ok = self.loose.done(self.state, self.data, k)
+            self.loose.settle(self.state)
 
     def _start_pose(self) -> np.ndarray:
         """The spec's start pose plus its uniform noise."""

@@ -29,7 +29,7 @@ class LooseBodies:
         cup = spec.task.cup
         self.cup = np.array([*cup.at, CUP_LIFT])
         self.cup_radius, self.cup_height = cup.radius, cup.height
-        self.held, self.jaw = -1, 0.0
+        self.held, self.jaw, self.on_cup, self.switched = -1, 0.0, False, False
 
     def reset(self, data: mujoco.MjData) -> None:
         """Bodies back on their spots, nothing held."""
@@ -38,6 +38,7 @@ class LooseBodies:
         for w in self.welds:
             data.eq_active[w] = 0
         self.held, self.jaw = -1, float(data.qpos[self.grasper.qadr[4]])
+        self.on_cup = self.switched = False
 
     def update(self, env, k: int) -> None:
         """Grasp or release body k by the jaw, and move subtask k's target to the body or, once held, the cup."""
@@ -51,16 +52,28 @@ class LooseBodies:
             d.eq_active[self.welds[self.held]] = 0
             self.held = -1
         self.jaw = jaw
-        goal = self.cup if self.held == k or self.in_cup(d, k) else body
-        env.t_pos[k] = goal
+        on_cup = self.held == k or self.over_cup(d, k)
+        self.switched, self.on_cup = on_cup != self.on_cup, on_cup
+        goal = self.cup if on_cup else body
         t = env.state
+        env.t_pos[k] = goal
         if t.subtask == k:
             t.target_pos = tuple(goal.tolist())
+        t.prev_tool_holding, t.tool_holding = t.tool_holding, self.held == k
+
+    def settle(self, s: TaskState) -> None:
+        """After the target moved between the body and the cup: no shaping for the jump itself."""
+        if self.switched:
+            s.prev_potential, s.prev_tool_potential = s.potential, s.tool_potential
+
+    def over_cup(self, data: mujoco.MjData, k: int) -> bool:
+        """Body k is above the cup's floor (in it, or falling into it)."""
+        p = data.xpos[self.bodies[k]]
+        return math.hypot(p[0] - self.cup[0], p[1] - self.cup[1]) < self.cup_radius
 
     def in_cup(self, data: mujoco.MjData, k: int) -> bool:
         """Body k lies inside the cup."""
-        p = data.xpos[self.bodies[k]]
-        return math.hypot(p[0] - self.cup[0], p[1] - self.cup[1]) < self.cup_radius and p[2] < self.cup_height
+        return self.over_cup(data, k) and data.xpos[self.bodies[k]][2] < self.cup_height
 
     def done(self, s: TaskState, data: mujoco.MjData, k: int) -> bool:
         """Body k rests in the cup, released."""

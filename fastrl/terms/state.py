@@ -64,6 +64,8 @@ class TaskState:
         "tool_ok",
         "tool_potential",
         "prev_tool_potential",
+        "tool_holding",
+        "prev_tool_holding",
     )
 
     def __init__(self):
@@ -93,6 +95,7 @@ class TaskState:
         self.tool_distance, self.tool_touching, self.tool_contacts, self.tool_in_view = 0.0, False, 0, False
         self.tool_ok = True  # no instrument: the cue never waits on one
         self.tool_potential = self.prev_tool_potential = 0.0
+        self.tool_holding = self.prev_tool_holding = False
 
     @property
     def distance_error(self) -> float:

@@ -39,6 +39,18 @@ def tool_shaping(s: TaskState) -> float:
     return s.gamma * s.tool_potential - s.prev_tool_potential
 
 
+@feature
+def grasp_shaping(s: TaskState) -> float:
+    """+1 when the grasper takes hold of the current body, -1 when it lets go (potential-based: not farmable)."""
+    return float(s.tool_holding) - float(s.prev_tool_holding)
+
+
+@term(size=1)
+def tool_holding(s: TaskState) -> tuple:
+    """1 while the grasper holds the current body, else 0."""
+    return (1.0 if s.tool_holding else 0.0,)
+
+
 @term(size=3)
 def tool_tip_pos(s: TaskState) -> tuple:
     """Instrument tip position in the world (m)."""
