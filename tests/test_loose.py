@@ -84,3 +84,20 @@ def test_a_body_dropped_beside_the_cup_does_not_count():
     for _ in range(40):
         _, _, _, _, info = env.step(a)
     assert u.loose.held == -1 and not u.loose.in_cup(u.data, 0) and info["subtask"] == 0
+
+
+def test_grasping_pays_once_per_body_and_the_target_jump_is_not_shaped():
+    env = fastrl.make(spec_file("loose_bodies"))
+    from fastrl.agents.expert import ScriptedExpert
+
+    expert = ScriptedExpert(env)
+    obs, _ = env.reset(seed=1)
+    grasps, shaping = [], []
+    for _ in range(1200):
+        obs, _, term, trunc, info = env.step(expert.act(obs))
+        grasps.append(info["features"]["grasp_shaping"])
+        shaping.append(info["features"]["tool_shaping"])
+        if term or trunc:
+            break
+    assert info["success"] and grasps.count(1.0) == 3 and sum(grasps) == 0.0
+    assert max(np.abs(shaping)) < 1.0  # the tip moves at most a few mm a step: no jump of the target in it
