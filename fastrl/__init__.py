@@ -18,6 +18,8 @@ TASK_IDS = {
     "Periscoping": "periscoping",
     "TraceLines": "tracelines",
     "LiverTour": "liver_tour",
+    "Triangulation": "triangulation",
+    "LooseBodies": "loose_bodies",
 }
 
 

@@ -350,6 +350,7 @@ def test_json_schema():
         "description",
         "scene",
         "scope",
+        "instruments",
         "task",
         "episode",
         "actions",

@@ -16,7 +16,15 @@ RESOLVE_EVERY = 15  # steps without green at the goal before the view is solved 
 class ScriptedExpert:
     """Drives a FastEnv through every subtask; `act()` returns an action in the env's action space."""
 
-    def __init__(self, env, pivot_weight: float | None = None, cable_weight: float = 0.005):
+    def __new__(cls, env, *args, scope_only: bool = False, **kwargs):
+        """A task with instruments gets the two-handed expert, which drives the scope through a scope-only one."""
+        if cls is ScriptedExpert and not scope_only and env.unwrapped.task.instruments:
+            from .hands_expert import TwoHandExpert
+
+            return TwoHandExpert(env, ScriptedExpert(env, *args, scope_only=True, **kwargs))
+        return super().__new__(cls)
+
+    def __init__(self, env, pivot_weight: float | None = None, cable_weight: float = 0.005, scope_only: bool = False):
         self.env: FastEnv = env.unwrapped
         self.kin = Kinematics(self.env.task)
         periscoping = self.env.task_spec.task.kind == "periscoping"
@@ -29,6 +37,7 @@ class ScriptedExpert:
         nv = self.env.model.nv
         self.jacp, self.jacr = np.zeros((3, nv)), np.zeros((3, nv))
         self.goal, self.goal_for, self.waiting = None, -1, 0
+        self.level = True  # solve for a level horizon too (the two-handed expert, whose tasks ignore it, does not)
 
     def reset(self) -> None:
         """Forget the current goal (call after env.reset)."""
@@ -47,7 +56,9 @@ class ScriptedExpert:
         env = self.env
         if self.goal_for != k or self.waiting > RESOLVE_EVERY:
             target = (env.t_pos[k], env.t_fwd[k], env.t_up[k])
-            self.goal, _ = solve_view(self.kin, k, q, target, self.pivot_weight, cable_weight=self.cable_weight)
+            self.goal, _ = solve_view(
+                self.kin, k, q, target, self.pivot_weight, cable_weight=self.cable_weight, level=self.level
+            )
             self.goal_for, self.waiting = k, 0
         return self.goal - q
 

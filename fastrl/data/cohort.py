@@ -8,6 +8,7 @@ import numpy as np
 
 from ..env.fast_env import FastEnv
 from ..spec.models import TaskSpec
+from .hands_trainee import TwoHandTrainee
 from .replay import replay, rollout_trajectory
 from .skill import NOVICE, SkillProfile, profile_for_level
 from .trainee import Trainee
@@ -35,7 +36,7 @@ def make_cohort(
     for level, profile in enumerate(profiles, start=1):
         for i in range(per_level):
             s = seed + (level - 1) * per_level + i
-            trainee = Trainee(env, profile, s)
+            trainee = (TwoHandTrainee if env.task.instruments else Trainee)(env, profile, s)
             meta = {
                 "source": "synthetic",
                 "subject": subject_name(level, i + 1),

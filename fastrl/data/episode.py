@@ -26,6 +26,7 @@ class EpisodeRecord:
     images: dict[int, np.ndarray] = field(default_factory=dict)  # step -> endoscope image (H, W, 3) uint8
     subtasks_total: int = 0
     success: bool = False
+    tools: np.ndarray | None = None  # (T+1, n, 2, 3) each instrument's tip and shaft end, if the task has any
 
     @property
     def steps(self) -> int:

@@ -18,17 +18,20 @@ def episode_steps(
     policy: Callable | None = None,
     portal: np.ndarray | None = None,
     on_reset: Callable | None = None,
+    instruments: np.ndarray | None = None,
 ) -> Iterator[tuple[np.ndarray, float, dict, object]]:
     """Yield (observation, reward, info, action) at the reset state (reward 0, action None) and after each step.
 
     With `policy` (observation -> action) the env steps until the episode terminates or is truncated; else the
-    recorded `portal` coordinates are replayed (the first is the reset pose) until the task terminates or they end.
+    recorded `portal` coordinates are replayed (the first is the reset pose) until the task terminates or they end,
+    with the `instruments`' coordinates beside them where recorded.
     `on_reset()` is called right after the reset."""
     u = env.unwrapped
     if policy is not None:
         obs, info = env.reset(seed=seed)
     else:
-        obs, info = u.reset(seed=seed, options={"portal": portal[0]})
+        options = {"portal": portal[0]} if instruments is None else {"portal": portal[0], "instruments": instruments[0]}
+        obs, info = u.reset(seed=seed, options=options)
     if on_reset is not None:
         on_reset()
     yield obs, 0.0, info, None
@@ -40,8 +43,8 @@ def episode_steps(
             yield obs, reward, info, action
             done = term or trunc
         return
-    for q in portal[1:]:
-        obs, reward, term, _, info = u.replay_step(q)
+    for i, q in enumerate(portal[1:], 1):
+        obs, reward, term, _, info = u.replay_step(q) if instruments is None else u.replay_step(q, instruments[i])
         yield obs, reward, info, None
         if term:
             break
@@ -56,6 +59,8 @@ class EpisodeRecorder:
         self.length = self.u.task_spec.scope.shaft_length
         self.image_every, self.image = image_every, image
         self.rows: list[tuple] = []
+        self.tools: list[np.ndarray] = []
+        self.tool_ends = [(t.tip_body, t.spec.shaft_length) for t in self.u.task.instruments]
         self.images: dict[int, np.ndarray] = {}
 
     def snapshot(self, reward: float, info: dict) -> int:
@@ -76,6 +81,11 @@ class EpisodeRecorder:
                 info["contacts"],
             )
         )
+        if self.tool_ends:
+            d = u.data
+            self.tools.append(
+                np.array([[d.xpos[b], d.xpos[b] - n * d.xmat[b].reshape(3, 3)[:, 2]] for b, n in self.tool_ends])
+            )
         step = len(self.rows) - 1
         if self.image_every and step % self.image_every == 0:
             self.images[step] = self.image(u)
@@ -102,4 +112,5 @@ class EpisodeRecorder:
             images=self.images,
             subtasks_total=info["subtasks_total"],
             success=bool(info["success"]),
+            tools=np.array(self.tools) if self.tools else None,
         )

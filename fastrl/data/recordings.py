@@ -78,7 +78,9 @@ def with_actions(env, named: list[tuple[str, Trajectory]]) -> Prepared:
             if action_problem(traj, mode) is not None:
                 recovery = recovery or ActionRecovery(u)
                 rec = recovery.recover(traj)
-                traj = Trajectory(traj.time, traj.portal, {**traj.meta, "actions": "recovered"}, rec.actions)
+                traj = Trajectory(
+                    traj.time, traj.portal, {**traj.meta, "actions": "recovered"}, rec.actions, traj.instruments
+                )
                 out.recovered += 1
                 out.residual += rec.residual.tolist()
         except (TrajectoryError, ValueError) as e:

@@ -18,12 +18,13 @@ def rollout_trajectory(
 ) -> tuple[Trajectory, np.ndarray]:
     """Run one episode and keep its portal coordinates and actions; also return the observations."""
     u = env.unwrapped
-    times, coords, actions, observations = [], [], [], []
+    times, coords, actions, observations, tools = [], [], [], [], []
     for step, (obs, _, info, action) in enumerate(episode_steps(env, seed, policy=policy, on_reset=on_reset)):
         if step:
             actions.append(np.asarray(action))
         times.append(info["time"] if step else 0.0)
         coords.append(u.portal_coordinates())
+        tools.append(u.instrument_coordinates())
         observations.append(obs)
     meta = {
         "spec": u.task_spec.name,
@@ -34,7 +35,8 @@ def rollout_trajectory(
         "subtasks_total": info["subtasks_total"],
         **meta,
     }
-    return Trajectory(np.array(times), np.array(coords), meta, np.array(actions)), np.array(observations)
+    instruments = np.array(tools) if u.task.instruments else None
+    return Trajectory(np.array(times), np.array(coords), meta, np.array(actions), instruments), np.array(observations)
 
 
 def expert_trajectories(env, seeds) -> list[Trajectory]:
@@ -47,6 +49,9 @@ def expert_trajectories(env, seeds) -> list[Trajectory]:
 def check_ranges(env, traj: Trajectory) -> None:
     """Refuse a trajectory whose coordinates the env's portal cannot reach (TrajectoryError naming the first)."""
     problem = traj.range_problem(env.unwrapped.task.ranges)
+    n = sum(len(t.qadr) for t in env.unwrapped.task.instruments)
+    if traj.instruments is not None and traj.instruments.shape[1] != n:
+        problem = f"instruments has {traj.instruments.shape[1]} coordinates per sample, the task's instruments {n}"
     if problem:
         raise TrajectoryError(problem)
 
@@ -58,7 +63,8 @@ def replay(env, traj: Trajectory, on_sample: Callable | None = None) -> tuple[np
     """
     check_ranges(env, traj)
     observations, infos, rewards = [], [], []
-    for obs, reward, info, _ in episode_steps(env, int(traj.meta.get("seed", 0)), portal=traj.portal):
+    seed = int(traj.meta.get("seed", 0))
+    for obs, reward, info, _ in episode_steps(env, seed, portal=traj.portal, instruments=traj.instruments):
         if on_sample is not None:
             on_sample(env.unwrapped)
         observations.append(obs)
@@ -107,7 +113,7 @@ def replay_episode(
     seed = int(traj.meta.get("seed", 0))
     rec = EpisodeRecorder(env, image_every=image_every, image=lambda u: u.render())
     observations = []
-    for obs, reward, info, _ in episode_steps(env, seed, portal=traj.portal):
+    for obs, reward, info, _ in episode_steps(env, seed, portal=traj.portal, instruments=traj.instruments):
         observations.append(obs)
         step = rec.snapshot(float(reward), info)
         if on_step is not None:

@@ -30,6 +30,7 @@ class Trajectory:
     portal: np.ndarray  # (T, 5) [pitch, yaw, insertion, roll, cable]
     meta: dict = field(default_factory=dict)  # spec, spec_hash, subject, skill, source, seed, ...
     actions: np.ndarray | None = None  # (T-1, ...) actions between samples, where known
+    instruments: np.ndarray | None = None  # (T, n) every instrument's portal coordinates, in spec order, if any
 
     def __post_init__(self):
         try:
@@ -37,6 +38,8 @@ class Trajectory:
             if self.actions is not None:
                 self.actions = np.asarray(self.actions)
                 real_array(self.actions, "actions")
+            if self.instruments is not None:
+                self.instruments = real_array(self.instruments, "instruments")
         except ValueError as e:
             raise TrajectoryError(str(e)) from None
         problem = self.problem()
@@ -52,6 +55,10 @@ class Trajectory:
         if not (np.all(np.isfinite(self.time)) and np.all(np.isfinite(self.portal))):
             rows = np.where(~np.isfinite(self.portal).all(1) | ~np.isfinite(self.time))[0]
             return f"non-finite values in rows {rows[:5].tolist()}{'...' if len(rows) > 5 else ''}"
+        if self.instruments is not None and (self.instruments.ndim != 2 or len(self.instruments) != len(self.time)):
+            return f"instruments must have shape ({len(self.time)}, n), got {self.instruments.shape}"
+        if self.instruments is not None and not np.all(np.isfinite(self.instruments)):
+            return "instruments hold non-finite values"
         if np.any(np.diff(self.time) <= 0):
             return "time must increase strictly"
         problem = time_problem(self.time)
@@ -77,6 +84,8 @@ class Trajectory:
         arrays = {"time": self.time, "portal": self.portal, "meta": np.array(json.dumps(self.meta))}
         if self.actions is not None:
             arrays["actions"] = np.asarray(self.actions)
+        if self.instruments is not None:
+            arrays["instruments"] = self.instruments
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         return atomic_write(path, lambda f: np.savez_compressed(f, **arrays))
@@ -94,13 +103,14 @@ class Trajectory:
                         raise TrajectoryError(f"{path}: missing arrays {sorted(missing)}")
                     meta = parse_meta(z["meta"])
                     actions = z["actions"] if "actions" in z.files else None
+                    instruments = z["instruments"] if "instruments" in z.files else None
                     time, portal = z["time"], z["portal"]
         except TrajectoryError:
             raise
         except (OSError, ValueError, zipfile.BadZipFile, EOFError, KeyError, zlib.error, NotImplementedError) as e:
             raise TrajectoryError(f"{path}: {_reason(e)}") from None
         try:
-            return cls(time, portal, meta, actions)
+            return cls(time, portal, meta, actions, instruments)
         except TrajectoryError as e:
             raise TrajectoryError(f"{path}: {e}") from None
 

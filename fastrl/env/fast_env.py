@@ -15,8 +15,11 @@ from ..spec import geometry as geo
 from ..spec.models import TaskSpec
 from ..terms import OBSERVATION_TERMS, REWARD_FEATURES, TaskState
 from .actions import ContinuousActions, DiscreteActions, RateActions
-from .cues import cue_checks, update_dwell
+from .cues import cue_checks, cue_green, update_dwell
+from .loose_sensing import LooseBodies
 from .sensing import Sensor
+from .tool_actions import ToolActions
+from .tool_sensing import ToolSensor, place_tools, tool_start
 
 ACTIVE, GREEN, DONE, HIDDEN = (1.0, 0.55, 0.1, 1.0), (0.1, 0.85, 0.2, 1.0), (0.3, 0.5, 1.0, 0.6), (0, 0, 0, 0)
 
@@ -41,6 +44,10 @@ class FastEnv(gym.Env):
             self.actions = RateActions(spec.actions, ranges, self.dt)
         else:
             self.actions = ContinuousActions(spec.actions, ranges, self.dt, self.model.body("scope_optics").id)
+        self.tools = ToolSensor(self.task) if self.task.instruments else None
+        self.loose = LooseBodies(self.task) if spec.task.bodies else None
+        if self.tools is not None:
+            self.actions = ToolActions(self.actions, spec.actions, self.task.instruments, self.dt)
         self.action_space = self.actions.space
         self.feature_names = list(spec.reward.features)
         self.feature_fns = [
@@ -79,13 +86,18 @@ class FastEnv(gym.Env):
         if q0 is None:
             q0 = self._start_pose()
         self.steps, self.done_count, self.elapsed = 0, 0, 0.0
+        if self.loose is not None:
+            self.loose.reset(self.data)
         self._place(np.asarray(q0, float))
+        if self.tools is not None:
+            tq = options.get("instruments")
+            self._place_tools(tool_start(self.task, self.np_random) if tq is None else np.asarray(tq, float))
         self.actions.reset(self.data, self.task.qadr)
         s = self.state
         s.time, s.dwell, s.prev_dwell, s.dwell_best, s.potential = 0.0, 0.0, 0.0, 0.0, 0.0
         self._select(0)
-        self.sensor.read(s, self.model, self.data, first=True)
-        s.green = all(cue_checks(s))
+        self._read(first=True)
+        s.green = cue_green(s)
         s.completed = False
         self._paint()
         obs = self._observe(first=True)
@@ -108,9 +120,11 @@ class FastEnv(gym.Env):
             raise RuntimeError("physics diverged (non-finite state)")
         return self._advance()
 
-    def replay_step(self, portal):
-        """Place the scope at recorded portal coordinates and score it like a step (for replay)."""
+    def replay_step(self, portal, instruments=None):
+        """Place the scope (and instruments) at recorded portal coordinates and score it like a step (for replay)."""
         self._place(np.asarray(portal, float), positions_only=True)
+        if self.tools is not None and instruments is not None:
+            self._place_tools(np.asarray(instruments, float), positions_only=True)
         return self._advance()
 
     def render(self):
@@ -128,10 +142,14 @@ class FastEnv(gym.Env):
         """Current [pitch, yaw, insertion, roll, cable] (rad, rad, m, rad, rad)."""
         return self.data.qpos[self.task.qadr].copy()
 
+    def instrument_coordinates(self) -> np.ndarray:
+        """Every instrument's portal coordinates, in spec order (empty without instruments)."""
+        return np.concatenate([self.data.qpos[t.qadr] for t in self.task.instruments] or [np.zeros(0)])
+
     def set_portal_coordinates(self, q) -> None:
         """Place the scope at portal coordinates, at rest, with the servos holding there."""
         self._place(np.asarray(q, float))
-        self.sensor.read(self.state, self.model, self.data, first=True)
+        self._read(first=True)
 
     def set_reward_weights(self, weights: dict[str, float]) -> None:
         """Change feature weights while running; names must be features of the spec."""
@@ -155,7 +173,7 @@ class FastEnv(gym.Env):
 
     def hold_here(self) -> None:
         """Servo targets to the current pose: the scope stays where an outside force (a mouse pull) left it."""
-        self.target = self.portal_coordinates().tolist()
+        self.target = self.portal_coordinates().tolist() + self.target[5:]
 
     def observation(self) -> np.ndarray:
         """The current observation, without advancing the frame stack."""
@@ -188,7 +206,7 @@ class FastEnv(gym.Env):
         s = self.state
         self.steps += 1
         s.time = self.steps * self.dt
-        self.sensor.read(s, self.model, self.data, first=False)
+        self._read(first=False)
         was_green = s.green
         self.elapsed = update_dwell(s, self.elapsed, self.dt)
         vals = [fn(s) for fn in self.feature_fns]
@@ -201,8 +219,10 @@ class FastEnv(gym.Env):
             if not terminated:
                 self._select(self.done_count)
                 self.sensor.errors(s, self.model, self.data)
+                if self.tools is not None:
+                    self.tools.errors(s, self.model, self.data)
                 s.dwell = s.prev_dwell = s.dwell_best = 0.0
-                s.green = all(cue_checks(s))
+                s.green = cue_green(s)
             self._paint()
         elif s.green != was_green:
             self._paint()
@@ -229,11 +249,14 @@ class FastEnv(gym.Env):
         """Per-step info: features, subtask, cue, success."""
         s = self.state
         c, h, d = cue_checks(s)
+        cue = {"centring": c, "horizon": h, "distance": d, "green": s.green, "dwell": s.dwell}
+        if self.tools is not None:
+            cue["touching"] = s.tool_touching
         return {
             "features": dict(zip(self.feature_names, vals)),
             "subtask": self.done_count,
             "subtasks_total": len(self.task.targets),
-            "cue": {"centring": c, "horizon": h, "distance": d, "green": s.green, "dwell": s.dwell},
+            "cue": cue,
             "success": self.done_count >= len(self.task.targets),
             "contacts": s.contacts,
             "time": s.time,
@@ -251,10 +274,31 @@ class FastEnv(gym.Env):
         d.qpos[self.task.qadr] = q
         d.qpos[self.task.lens_qadr] = -q[4]
         d.qvel[:] = 0.0
-        d.ctrl[:] = q
-        self.target = q.tolist()
+        d.ctrl[:5] = q
+        self.target = q.tolist() + list(self.target[5:] if self.tools is not None and hasattr(self, "target") else [])
         self._positions_only = positions_only
         (mujoco.mj_fwdPosition if positions_only else mujoco.mj_forward)(m, d)
+
+    def _place_tools(self, q: np.ndarray, positions_only: bool = False) -> None:
+        """Set the instruments' coordinates at rest, servos holding there, and recompute positions."""
+        n = sum(len(t.qadr) for t in self.task.instruments)
+        if q.shape != (n,) or not np.isfinite(q).all():
+            raise ValueError(f"instrument coordinates must be {n} finite numbers, got {q!r}")
+        self.target = self.target[:5] + place_tools(self.task, self.data, q).tolist()
+        self._positions_only = positions_only
+        (mujoco.mj_fwdPosition if positions_only else mujoco.mj_forward)(self.model, self.data)
+
+    def _read(self, first: bool) -> None:
+        """Read the scope (and instruments) into the task state."""
+        k = min(self.done_count, len(self.t_pos) - 1)
+        if self.loose is not None:
+            self.loose.update(self, k)
+        self.sensor.read(self.state, self.model, self.data, first=first)
+        if self.tools is not None:
+            self.tools.read(self.state, self.model, self.data, first=first)
+        if self.loose is not None:
+            self.state.tool_ok = self.loose.done(self.state, self.data, k)
+            self.loose.settle(self.state)
 
     def _start_pose(self) -> np.ndarray:
         """The spec's start pose plus its uniform noise."""

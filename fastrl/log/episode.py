@@ -9,6 +9,7 @@ import rerun as rr
 
 from ..data.episode import EpisodeRecord
 from ..model.compiler import CompiledTask
+from .instruments import log_instruments
 from .shapes import rgba, viridis
 
 GREEN = rgba((0.1, 0.85, 0.2))
@@ -43,6 +44,7 @@ def log_episode(
     _log_scope(rec, world, ep, scene, task.spec.scope.diameter)
     _log_camera(rec, world, ep, scene, fov_deg, image_size, timesteps)
     _log_path(rec, world, ep)
+    log_instruments(rec, world, ep, scene, task)
     _log_cue(rec, world, ep, scene, task)
     _log_scalars(rec, metrics, ep, index)
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -11,6 +11,8 @@ import numpy as np
 from ..spec.models import TaskSpec
 from .abdomen import build_abdomen
 from .dome import build_dome
+from .instruments import InstrumentHandles, build_instrument, instrument_handles
+from .loose import build_loose
 from .scope import JOINTS, build_scope, joint_ranges
 from .targets import Targets, build_targets, resolve_targets
 
@@ -40,6 +42,7 @@ class CompiledTask:
     tip_geom: int
     avatar_geoms: np.ndarray  # (N, 2) disk and up-marker geom ids
     xml: str
+    instruments: list[InstrumentHandles] = field(default_factory=list)  # probes and graspers, in spec order
 
 
 def build_mjspec(task_spec: TaskSpec) -> tuple[mujoco.MjSpec, dict]:
@@ -63,8 +66,12 @@ def build_mjspec(task_spec: TaskSpec) -> tuple[mujoco.MjSpec, dict]:
     portals = SCENES[task_spec.scene.kind](spec, task_spec.scene)
     point, rot = portals[task_spec.scope.portal]
     build_scope(spec, task_spec.scope, point, rot)
+    for inst in task_spec.instruments:
+        build_instrument(spec, inst, *portals[inst.portal])
     targets = resolve_targets(task_spec)
     build_targets(spec, targets, task_spec.task.line.width if task_spec.task.line else 0.0015)
+    if task_spec.task.bodies:
+        build_loose(spec, task_spec)
     return spec, portals
 
 
@@ -91,4 +98,5 @@ def compile_task(task_spec: TaskSpec) -> CompiledTask:
             [[model.geom(f"avatar_{i}").id, model.geom(f"avatar_{i}_up").id] for i in range(len(targets))]
         ),
         xml=spec.to_xml(),
+        instruments=[instrument_handles(model, inst, *portals[inst.portal]) for inst in task_spec.instruments],
     )

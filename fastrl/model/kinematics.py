@@ -53,6 +53,7 @@ def solve_view(
     pivot_weight: float = 0.02,
     margin: float = 0.008,
     cable_weight: float = 0.005,
+    level: bool = True,
 ) -> tuple[np.ndarray, float]:
     """Portal coordinates that centre, level and hold subtask k's avatar at mid distance, near q0."""
     task = kin.task
@@ -67,6 +68,8 @@ def solve_view(
         pos, rot = kin.camera(q)
         r = view_residuals(pos, rot, pos_t, fwd_t, up_t, mid, span)
         r[:3] /= np.array([t.centring[k], t.centring[k], t.horizon[k]]) * 0.5
+        if not level:  # any horizon will do: no roll or cable turn for it
+            r[2] = 0.0
         inside = [max(0.0, np.linalg.norm(pos) - (radius - margin)) * 500, max(0.0, margin - pos[2]) * 500]
         return np.concatenate([r, inside, reg * (q - q0)])
 

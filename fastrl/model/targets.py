@@ -40,6 +40,8 @@ class Targets:
 def task_avatars(task_spec: TaskSpec) -> tuple[list[Avatar], np.ndarray | None]:
     """The avatars in order, and for TraceLines the dense line they are placed along."""
     task = task_spec.task
+    if task.bodies:  # loose bodies: one subtask per body, its cue first on the body, then on the cup
+        return [Avatar(surface="plate", at=b.at) for b in task.bodies], None
     if task.line is None:
         return list(task.avatars), None
     pts = np.asarray(task.line.points, float)

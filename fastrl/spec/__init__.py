@@ -4,7 +4,7 @@ import hashlib
 import json
 from pathlib import Path
 
-from .defaults import canonical_dump
+from .defaults import canonical_dump, drop_unused_extensions
 from .loader import SpecError, SpecIssue, apply_overrides, load_model, read_yaml
 from .models import Avatar, Cue, DomeScene, Line, Portal, Scope, Task, TaskSpec
 
@@ -30,7 +30,9 @@ def spec_hash(spec: TaskSpec) -> str:
 
 def task_hash(spec: TaskSpec) -> str:
     """SHA-256 of what a trajectory's replay depends on: scene, scope, task and episode (16 hex digits)."""
-    world = spec.model_dump(mode="json", include={"scene", "scope", "task", "episode"})
+    world = drop_unused_extensions(
+        spec.model_dump(mode="json", include={"scene", "scope", "task", "episode", "instruments"})
+    )
     text = json.dumps(world, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 

@@ -43,10 +43,21 @@ def resolve_defaults(spec) -> None:
             object.__setattr__(spec, path[0], _replace(section, path[1:], value))  # frozen: set once, here
 
 
+def drop_unused_extensions(data: dict) -> dict:
+    """Leave out instruments, loose bodies and cup where a spec has none: it keeps the hashes it had before them."""
+    if not data.get("instruments", True):
+        del data["instruments"]
+    task = data.get("task", {})
+    for key, empty in (("bodies", []), ("cup", None)):
+        if key in task and task[key] == empty:
+            del task[key]
+    return data
+
+
 def canonical_dump(spec) -> dict:
     """The spec as JSON data with every algorithm-dependent field that holds its default written as null, so a spec
     hashes the same whether it was resolved or not (old runs and trajectories keep their spec_hash)."""
-    data = spec.model_dump(mode="json")
+    data = drop_unused_extensions(spec.model_dump(mode="json"))
     for path, value in algorithm_defaults(spec).items():
         node = data
         for name in path[:-1]:

@@ -14,8 +14,10 @@ from .anatomy import landmark_pose
 from .base import NonNeg, Pos, Strict, _fail, _raise
 from .defaults import resolve_defaults
 from .experiment import Experiment
+from .instruments import Instrument, instrument_errors
 from .irl import IRL
 from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_SECONDS, MAX_SUBTASKS
+from .loose import Cup, LooseBody, loose_errors
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
 from .training import Evaluate, Train
 
@@ -113,10 +115,12 @@ class Landmark(Strict):
 class Task(Strict):
     """Which task, its avatars, line or landmarks, and the default cue."""
 
-    kind: Literal["image_centring", "periscoping", "trace_lines", "liver_tour"]
+    kind: Literal["image_centring", "periscoping", "trace_lines", "liver_tour", "triangulation", "loose_bodies"]
     avatars: list[Avatar] = Field([], max_length=MAX_SUBTASKS)
     line: Line | None = None
     landmarks: list[Landmark] = Field([], max_length=MAX_SUBTASKS)
+    bodies: list[LooseBody] = Field([], max_length=MAX_SUBTASKS, description="loose_bodies: what to grasp")
+    cup: Cup | None = Field(None, description="loose_bodies: where to drop them")
     cue: Cue = Cue()
     jitter: tuple[NonNeg, NonNeg] = Field(
         (0.0, 0.0), description="random avatar offset at reset: metres on the plate, degrees on the dome"
@@ -136,7 +140,7 @@ class Task(Strict):
                 raise ValueError("liver_tour needs at least one landmark")
             if self.avatars or self.line is not None or any(self.jitter):
                 raise ValueError("liver_tour has landmarks fixed to the anatomy: no avatars, line or jitter")
-        elif self.kind != "trace_lines" and not self.avatars:
+        elif self.kind not in ("trace_lines", "loose_bodies") and not self.avatars:
             raise ValueError(f"{self.kind} needs at least one avatar")
         return self
 
@@ -256,6 +260,7 @@ class TaskSpec(Strict):
     description: str = ""
     scene: Scene
     scope: Scope
+    instruments: list[Instrument] = Field([], max_length=4, description="probes and graspers besides the scope")
     task: Task
     episode: Episode = Episode()
     actions: Actions = Actions()
@@ -302,7 +307,7 @@ class TaskSpec(Strict):
                         lm.organ,
                     )
                 )
-        _raise(errors)
+        _raise(errors + instrument_errors(self) + loose_errors(self))
         for i, av in enumerate(self.task.avatars):
             problem = self.avatar_problem(av)
             if problem:

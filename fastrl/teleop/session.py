@@ -15,7 +15,7 @@ from ..data.replay import cue_events
 from ..env.fast_env import FastEnv
 from ..spec import spec_hash, task_hash
 from ..spec.models import TaskSpec
-from .keymap import BY_CODE
+from .keymap import BY_CODE, hand_action
 from .writer import AttemptWriter
 
 
@@ -55,6 +55,7 @@ class Session:
         self.keys: deque = deque()
         self.lock = threading.Lock()
         self.held, self.held_until = 0, 0.0
+        self.hand, self.sizes = 0, [len(t.qadr) for t in self.env.task.instruments]
         self.stop: str | None = None
         self.want_suggestion = False
         self.suggestion: Suggestion | None = None
@@ -87,13 +88,17 @@ class Session:
             with self.lock:
                 self.keys.append((time.monotonic(), code))
 
+    def _tools(self):
+        """The instruments' coordinates, or None without instruments."""
+        return self.env.instrument_coordinates() if self.sizes else None
+
     # ---- the loop --------------------------------------------------------------------------
     def start(self) -> dict:
         """Reset the task and record the first sample."""
         _, info = self.env.reset(seed=self.seed)
         self.info = info
         self.infos.append(info)
-        self.writer.add(0.0, self.env.portal_coordinates(), None)
+        self.writer.add(0.0, self.env.portal_coordinates(), None, self._tools())
         self._cue()
         return info
 
@@ -111,8 +116,10 @@ class Session:
                 self.stop = self.stop or "quit"
             elif key.command == "suggest":
                 self.want_suggestion = True
+            elif key.command == "switch":
+                self.hand, self.held = (self.hand + 1) % (1 + len(self.sizes)), 0
             else:
-                self.held, self.held_until = key.action, now + self.hold
+                self.held, self.held_until = hand_action(key.action, self.hand, self.sizes), now + self.hold
         action = self.held if now < self.held_until else 0
         _, _, term, trunc, info = self.env.step(action)
         if pulled:
@@ -120,7 +127,7 @@ class Session:
             self.pulled_ticks += 1
         self.info = info
         self.infos.append(info)
-        self.writer.add(info["time"], self.env.portal_coordinates(), action)
+        self.writer.add(info["time"], self.env.portal_coordinates(), action, self._tools())
         self._cue()
         if self.suggest_every and self.env.steps % self.suggest_every == 0:
             self.want_suggestion = True

@@ -1,6 +1,6 @@
 """Pure reward and observation terms over the task state, registered by name."""
 
-from . import observations, rewards  # noqa: F401  (registers the terms)
+from . import observations, rewards, tools  # noqa: F401  (registers the terms)
 from .registry import OBSERVATION_TERMS, REWARD_FEATURES, Term
 from .rewards import cue_potential, tolerance
 from .state import TaskState

@@ -52,6 +52,20 @@ class TaskState:
         "potential",
         "prev_potential",
         "goals",
+        "tool_pos",
+        "tool_quat",
+        "tool_vel",
+        "tool_portal",
+        "tool_to_target",
+        "tool_distance",
+        "tool_touching",
+        "tool_contacts",
+        "tool_in_view",
+        "tool_ok",
+        "tool_potential",
+        "prev_tool_potential",
+        "tool_holding",
+        "prev_tool_holding",
     )
 
     def __init__(self):
@@ -76,6 +90,12 @@ class TaskState:
         self.line_deviation = self.ray_fraction = 0.0
         self.potential = self.prev_potential = 0.0
         self.goals = z3
+        self.tool_pos = self.tool_vel = self.tool_to_target = z3
+        self.tool_quat, self.tool_portal = (1.0, 0.0, 0.0, 0.0), (0.0,) * 4
+        self.tool_distance, self.tool_touching, self.tool_contacts, self.tool_in_view = 0.0, False, 0, False
+        self.tool_ok = True  # no instrument: the cue never waits on one
+        self.tool_potential = self.prev_tool_potential = 0.0
+        self.tool_holding = self.prev_tool_holding = False
 
     @property
     def distance_error(self) -> float:

@@ -1,0 +1,93 @@
+"""LooseBodies in the env: grasping (a weld switched on when the jaws close on a body), release, the cup."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from ..model.compiler import CompiledTask
+from ..terms.state import TaskState
+
+CLOSED, OPEN = math.radians(8.0), math.radians(20.0)  # jaw below: closed; above: open
+GRAB = 0.007  # the tip closes on a body within this distance of its centre (m)
+CUP_LIFT = 0.001  # the cup's target point above its floor (m)
+
+
+class LooseBodies:
+    """Holds which body is grasped, points the cue at the current body (or the cup once it is held) and checks drops."""
+
+    def __init__(self, task: CompiledTask):
+        m, spec = task.model, task.spec
+        self.task = task
+        self.bodies = [m.body(f"loose_{i}").id for i in range(len(spec.task.bodies))]
+        self.joints = [int(m.jnt_qposadr[m.joint(f"loose_{i}").id]) for i in range(len(self.bodies))]
+        self.welds = [m.equality(f"hold_{i}").id for i in range(len(self.bodies))]
+        self.home = [np.array([*b.at, b.radius + 1e-4, 1.0, 0.0, 0.0, 0.0]) for b in spec.task.bodies]
+        self.grasper = next(t for t in task.instruments if t.spec.kind == "grasper")
+        cup = spec.task.cup
+        self.cup = np.array([*cup.at, CUP_LIFT])
+        self.cup_radius, self.cup_height = cup.radius, cup.height
+        self.held, self.jaw, self.on_cup, self.switched = -1, 0.0, False, False
+
+    def reset(self, data: mujoco.MjData) -> None:
+        """Bodies back on their spots, nothing held."""
+        for adr, home in zip(self.joints, self.home):
+            data.qpos[adr : adr + 7] = home
+        for w in self.welds:
+            data.eq_active[w] = 0
+        self.held, self.jaw = -1, float(data.qpos[self.grasper.qadr[4]])
+        self.on_cup = self.switched = False
+
+    def update(self, env, k: int) -> None:
+        """Grasp or release body k by the jaw, and move subtask k's target to the body or, once held, the cup."""
+        m, d = env.model, env.data
+        jaw = float(d.qpos[self.grasper.qadr[4]])
+        tip = d.xpos[self.grasper.tip_body]
+        body = d.xpos[self.bodies[k]]
+        if self.held < 0 and jaw <= CLOSED < self.jaw and np.linalg.norm(body - tip) <= GRAB:
+            self._hold(m, d, k)
+        elif self.held >= 0 and jaw >= OPEN:
+            d.eq_active[self.welds[self.held]] = 0
+            self.held = -1
+        self.jaw = jaw
+        on_cup = self.held == k or self.over_cup(d, k)
+        self.switched, self.on_cup = on_cup != self.on_cup, on_cup
+        goal = self.cup if on_cup else body
+        t = env.state
+        env.t_pos[k] = goal
+        if t.subtask == k:
+            t.target_pos = tuple(goal.tolist())
+        t.prev_tool_holding, t.tool_holding = t.tool_holding, self.held == k
+
+    def settle(self, s: TaskState) -> None:
+        """After the target moved between the body and the cup: no shaping for the jump itself."""
+        if self.switched:
+            s.prev_potential, s.prev_tool_potential = s.potential, s.tool_potential
+
+    def over_cup(self, data: mujoco.MjData, k: int) -> bool:
+        """Body k is above the cup's floor (in it, or falling into it)."""
+        p = data.xpos[self.bodies[k]]
+        return math.hypot(p[0] - self.cup[0], p[1] - self.cup[1]) < self.cup_radius
+
+    def in_cup(self, data: mujoco.MjData, k: int) -> bool:
+        """Body k lies inside the cup."""
+        return self.over_cup(data, k) and data.xpos[self.bodies[k]][2] < self.cup_height
+
+    def done(self, s: TaskState, data: mujoco.MjData, k: int) -> bool:
+        """Body k rests in the cup, released."""
+        return self.held != k and self.in_cup(data, k)
+
+    def _hold(self, m: mujoco.MjModel, d: mujoco.MjData, k: int) -> None:
+        """Weld body k to the grasper's tip where it is now."""
+        s = self.grasper.tip_body
+        rs, rb = d.xmat[s].reshape(3, 3), d.xmat[self.bodies[k]].reshape(3, 3)
+        w = self.welds[k]
+        m.eq_data[w, 0:3] = 0.0
+        m.eq_data[w, 3:6] = rs.T @ (d.xpos[self.bodies[k]] - d.xpos[s])
+        q = np.zeros(4)
+        mujoco.mju_mat2Quat(q, (rs.T @ rb).ravel())
+        m.eq_data[w, 6:10] = q
+        d.eq_active[w] = 1
+        self.held = k

@@ -1,0 +1,113 @@
+"""Instruments besides the arthroscope: a palpation probe or a grasper through a portal of their own."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from .base import NonNeg, Pos, Strict, _fail
+
+
+class InstrumentStart(Strict):
+    """Initial portal coordinates of an instrument."""
+
+    pitch_deg: float = 0.0
+    yaw_deg: float = 0.0
+    insertion: float = 0.03
+    roll_deg: float = 0.0
+    jaw_deg: float = Field(0.0, ge=0, description="grasper: initial jaw opening (deg)")
+    noise: tuple[float, float, float, float] = Field(
+        (0.0, 0.0, 0.0, 0.0), description="uniform +- noise per coordinate at reset (deg, deg, m, deg)"
+    )
+
+
+class Instrument(Strict):
+    """A probe (palpation hook) or grasper: shaft through a portal, the same exact fulcrum chain as the scope."""
+
+    name: str = Field(pattern=r"^[A-Za-z][A-Za-z0-9_]*$")
+    kind: Literal["probe", "grasper"]
+    portal: str
+    shaft_length: float = Field(0.16, gt=0.05, le=0.5)
+    diameter: float = Field(0.003, gt=0.001, le=0.02)
+    insertion: tuple[NonNeg, Pos] = Field((0.01, 0.15), description="tip depth range past the portal (m)")
+    pivot_limit_deg: float = Field(60.0, gt=0, le=85)
+    jaw_deg: float = Field(60.0, gt=0, le=120, description="grasper: widest jaw opening (deg)")
+    touch: Pos = Field(0.004, le=0.05, description="the tip touches a target within this distance of it (m)")
+    damping: NonNeg = Field(0.05, description="entry-point damping on the portal joints")
+    frictionloss: NonNeg = Field(0.002, description="entry-point dry friction on the portal joints")
+    start: InstrumentStart = InstrumentStart()
+
+    @model_validator(mode="after")
+    def _ranges(self):
+        lo, hi = self.insertion
+        if lo >= hi:
+            _fail("insertion", f"insertion range must be increasing, got {list(self.insertion)}")
+        if hi >= self.shaft_length:
+            _fail("insertion", f"insertion {hi} m must be shorter than the shaft ({self.shaft_length} m)")
+        if not lo <= self.start.insertion <= hi:
+            _fail("start.insertion", f"start insertion {self.start.insertion} m is outside {list(self.insertion)}")
+        if self.start.jaw_deg > self.jaw_deg:
+            _fail("start.jaw_deg", f"start jaw {self.start.jaw_deg} deg is wider than jaw_deg {self.jaw_deg}")
+        return self
+
+    @property
+    def coordinates(self) -> int:
+        """How many portal coordinates drive it: pitch, yaw, insertion, roll (and the grasper's jaw)."""
+        return 5 if self.kind == "grasper" else 4
+
+
+def instrument_errors(spec) -> list[tuple[tuple, str, object]]:
+    """(loc, message, input) for instruments in unknown or taken portals, or out of reach of their targets."""
+    import math
+
+    import numpy as np
+
+    from . import geometry as geo
+
+    errors = []
+    portals = {p.name: p for p in spec.scene.portals}
+    taken = {spec.scope.portal: "the scope"}
+    for i, inst in enumerate(spec.instruments):
+        if inst.portal not in portals:
+            errors.append(
+                (
+                    ("instruments", i, "portal"),
+                    f"no portal named '{inst.portal}' (portals: {', '.join(portals)})",
+                    inst.portal,
+                )
+            )
+            continue
+        if inst.portal in taken:
+            errors.append(
+                (("instruments", i, "portal"), f"portal '{inst.portal}' is taken by {taken[inst.portal]}", inst.portal)
+            )
+        taken[inst.portal] = f"instrument '{inst.name}'"
+    names = [inst.name for inst in spec.instruments]
+    if len(set(names)) != len(names):
+        errors.append((("instruments",), f"instrument names must be unique, got {names}", names))
+    kinds = {inst.kind for inst in spec.instruments}
+    needs = {"triangulation": "probe", "loose_bodies": "grasper"}.get(spec.task.kind)
+    if needs and needs not in kinds:
+        errors.append((("task", "kind"), f"{spec.task.kind} needs an instrument of kind '{needs}'", spec.task.kind))
+    if errors or not needs:
+        return errors
+    inst = next(x for x in spec.instruments if x.kind == needs)
+    p = portals[inst.portal]
+    point, rot = geo.portal_frame(spec.scene.radius, p.azimuth, p.elevation, p.aim)
+    for i, av in enumerate(spec.task.avatars):
+        pos, _, _ = geo.avatar_pose(spec.scene.radius, av.surface, av.at, av.heading_deg)
+        d = pos - point
+        dist = float(np.linalg.norm(d))
+        off = math.degrees(math.acos(np.clip(d @ rot[:, 2] / dist, -1, 1)))
+        if off > inst.pivot_limit_deg or dist > inst.insertion[1]:
+            errors.append(
+                (
+                    ("task", "avatars", i, "at"),
+                    f"instrument '{inst.name}' cannot reach this target from portal '{p.name}': it is {dist:.3f} m "
+                    f"away and {off:.0f} deg off the portal axis "
+                    f"(reach {inst.insertion[1]} m, {inst.pivot_limit_deg:g} deg)",
+                    list(av.at),
+                )
+            )
+    return errors

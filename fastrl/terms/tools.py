@@ -1,0 +1,87 @@
+"""Reward features and observation terms of the instruments (probe, grasper): pure functions of the task state."""
+
+from __future__ import annotations
+
+from .registry import OBSERVATION_TERMS, REWARD_FEATURES
+from .rewards import tolerance
+from .state import TaskState
+
+feature, term = REWARD_FEATURES.register, OBSERVATION_TERMS.register
+
+
+@feature
+def tool_near(s: TaskState, within: float = 0.004, margin: float = 0.03) -> float:
+    """Tolerance kernel of the instrument tip's distance to the target: 1 within `within` m."""
+    return tolerance(s.tool_distance, 0.0, within, margin)
+
+
+@feature
+def tool_touch(s: TaskState) -> float:
+    """1 while the instrument tip touches the target."""
+    return 1.0 if s.tool_touching else 0.0
+
+
+@feature
+def tool_in_view(s: TaskState) -> float:
+    """1 while the instrument tip is inside the scope's field of view."""
+    return 1.0 if s.tool_in_view else 0.0
+
+
+@feature
+def tool_contact(s: TaskState) -> float:
+    """1 while an instrument touches anything but the target (a safety event)."""
+    return 1.0 if s.tool_contacts else 0.0
+
+
+@feature
+def tool_shaping(s: TaskState) -> float:
+    """Potential-based shaping of the tip-to-target distance: gamma * Phi(s') - Phi(s), Phi = -distance / 2 cm."""
+    return s.gamma * s.tool_potential - s.prev_tool_potential
+
+
+@feature
+def grasp_shaping(s: TaskState) -> float:
+    """+1 when the grasper takes hold of the current body, -1 when it lets go (potential-based: not farmable)."""
+    return float(s.tool_holding) - float(s.prev_tool_holding)
+
+
+@term(size=1)
+def tool_holding(s: TaskState) -> tuple:
+    """1 while the grasper holds the current body, else 0."""
+    return (1.0 if s.tool_holding else 0.0,)
+
+
+@term(size=3)
+def tool_tip_pos(s: TaskState) -> tuple:
+    """Instrument tip position in the world (m)."""
+    return s.tool_pos
+
+
+@term(size=4)
+def tool_tip_quat(s: TaskState) -> tuple:
+    """Instrument shaft orientation quaternion (w, x, y, z)."""
+    return s.tool_quat
+
+
+@term(size=3)
+def tool_tip_vel(s: TaskState) -> tuple:
+    """Instrument tip linear velocity (m/s)."""
+    return s.tool_vel
+
+
+@term(size=3)
+def tool_to_target(s: TaskState) -> tuple:
+    """Vector from the instrument tip to the current target (m)."""
+    return s.tool_to_target
+
+
+@term(size=1)
+def tool_touching(s: TaskState) -> tuple:
+    """1 while the instrument tip touches the target, else 0."""
+    return (1.0 if s.tool_touching else 0.0,)
+
+
+@term(size=1)
+def tool_visible(s: TaskState) -> tuple:
+    """1 while the instrument tip is in the scope's field of view, else 0."""
+    return (1.0 if s.tool_in_view else 0.0,)
