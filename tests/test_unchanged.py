@@ -11,17 +11,19 @@ from .conftest import spec_file
 from .rollouts import REFERENCE_SPECS, expert_episodes, model_digest, references
 
 MAIN = np.load(Path(__file__).parent / "data" / "main_rollouts.npz")  # recorded on main before instruments
+# Deliberate changes to a bundled spec since the references were recorded, set back for the comparison.
+SINCE = {"liver_tour": ["episode.time_limit=40"]}  # 90 s since 2026-11-25: every synthetic procedure finishes
 
 
 @pytest.mark.parametrize("name", REFERENCE_SPECS)
 def test_bundled_specs_behave_as_on_main(name):
-    live = references(name)
+    spec = load_spec(spec_file(name), SINCE.get(name, []))
+    live = references(name, spec)
     assert {k for k in MAIN.files if k.startswith(f"{name}/") and k.count("/") == 3} == set(live)
     for key, arr in live.items():
         np.testing.assert_array_equal(arr, MAIN[key], err_msg=key)
-    np.testing.assert_array_equal(expert_episodes(name), MAIN[f"{name}/episodes"])
-    assert model_digest(spec_file(name)) == str(MAIN[f"{name}/xml_sha256"])
-    spec = load_spec(spec_file(name))
+    np.testing.assert_array_equal(expert_episodes(name, spec), MAIN[f"{name}/episodes"])
+    assert model_digest(spec) == str(MAIN[f"{name}/xml_sha256"])
     assert spec_hash(spec) == str(MAIN[f"{name}/spec_hash"])
     assert task_hash(spec) == str(MAIN[f"{name}/task_hash"])
 
