@@ -25,7 +25,7 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-from fastrl.agents.sb3 import FreshInfoVecEnv
+from fastrl.agents.workers import FreshInfoVecEnv, SplitVecEnv
 from fastrl.env.fast_env import FastEnv
 from fastrl.log import RunRecorder
 from fastrl.runner import monitor as run_monitor
@@ -59,6 +59,8 @@ def vec_step(fn):
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
+        if IN_VEC[0]:  # the split env's own batch, inside its step_wait
+            return fn(*args, **kwargs)
         IN_VEC[0] = True
         t0 = time.perf_counter()
         try:
@@ -74,6 +76,7 @@ def vec_step(fn):
 def instrument() -> None:
     """Install the timers."""
     FreshInfoVecEnv.step_wait = vec_step(FreshInfoVecEnv.step_wait)
+    SplitVecEnv.step_wait = vec_step(SplitVecEnv.step_wait)
     FastEnv.step = timed("eval: env stepping", FastEnv.step, skip_inside_vec=True)
     FastEnv.render_views = timed("eval: endoscope rendering", FastEnv.render_views)
     for name in (
