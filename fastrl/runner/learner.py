@@ -98,7 +98,7 @@ def demonstrations(spec: TaskSpec, run: Path, console: Console, progress: bool) 
 
 def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = True) -> Learner:
     """The model (and, learning from demonstrations, the discriminator and its callback) for a run."""
-    venv = make_vec_env(spec, spec.train.n_envs, spec.train.seed)
+    venv = make_vec_env(spec, spec.train.n_envs, spec.train.seed, spec.train.workers)
     irl = spec.irl
     if irl.algorithm in ("none", "bc"):
         learner = Learner(spec, venv, build_model(spec, venv))

@@ -8,6 +8,7 @@ import shutil
 import time
 from collections import deque
 from collections.abc import Callable
+from operator import itemgetter
 from pathlib import Path
 
 import numpy as np
@@ -75,6 +76,7 @@ class TrainingMonitor(BaseCallback):
     def _on_training_start(self) -> None:
         n = self.training_env.num_envs
         self.ret, self.feats = np.zeros(n), np.zeros((n, len(self.names)))
+        self.pick = itemgetter(*self.names) if len(self.names) > 1 else lambda f: (f[self.names[0]],)
         self.start_steps = self.logged = self.num_timesteps
         self.started = time.perf_counter()
         self.next_log = self.num_timesteps + self.log_every
@@ -89,20 +91,21 @@ class TrainingMonitor(BaseCallback):
         env = self.training_env
         rewards = env.get_original_reward() if isinstance(env, VecNormalize) else self.locals["rewards"]
         self.ret += rewards
-        for i, (info, done) in enumerate(zip(self.locals["infos"], self.locals["dones"])):
-            self.feats[i] += [info["features"][n] for n in self.names]
-            if done:
-                ep = {
-                    "return": float(self.ret[i]),
-                    "success": float(info["success"]),
-                    "subtasks": info["subtask"] / max(1, info["subtasks_total"]),
-                    "time": info["time"],
-                    "features": self.feats[i].copy(),
-                }
-                self.recent.append(ep)
-                self.window.append(ep)
-                self.episodes += 1
-                self.ret[i], self.feats[i] = 0.0, 0.0
+        infos = self.locals["infos"]
+        self.feats += [self.pick(info["features"]) for info in infos]
+        for i in np.flatnonzero(self.locals["dones"]):
+            info = infos[i]
+            ep = {
+                "return": float(self.ret[i]),
+                "success": float(info["success"]),
+                "subtasks": info["subtask"] / max(1, info["subtasks_total"]),
+                "time": info["time"],
+                "features": self.feats[i].copy(),
+            }
+            self.recent.append(ep)
+            self.window.append(ep)
+            self.episodes += 1
+            self.ret[i], self.feats[i] = 0.0, 0.0
         if self.num_timesteps >= self.next_tick:
             self.next_tick += 2048
             self.progress.update(self.task_id, completed=self.num_timesteps, rate=f"{self.rate():.0f}")

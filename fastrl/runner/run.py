@@ -10,7 +10,7 @@ import numpy as np
 from rich.console import Console
 
 from ..agents.expert import ScriptedExpert
-from ..agents.sb3 import load_checkpoint, policy_function, save_checkpoint
+from ..agents.sb3 import batch_policy, load_checkpoint, policy_function, save_checkpoint
 from ..atomic import DiskFull, is_disk_full, write_json, write_text
 from ..env.fast_env import FastEnv
 from ..irl.export import save_networks
@@ -19,7 +19,7 @@ from ..log.recording import recording_problem, repair_recording
 from ..model.compiler import CompiledTask, compile_task
 from ..spec import load_spec
 from ..spec.models import TaskSpec
-from .evaluate import evaluate
+from .evaluate import evaluate, evaluate_batched
 from .learner import build_learner
 from .monitor import TrainingMonitor
 from .rundir import clean_leftovers, latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
@@ -155,6 +155,8 @@ def _train_and_evaluate(
     except BaseException:
         _close(run, recorder)
         raise
+    finally:
+        learner.venv.close()  # its worker processes, if any
     _close(run, recorder)
     return run
 
@@ -254,14 +256,16 @@ def _stages(
 
 
 def periodic_evaluator(spec: TaskSpec, model, venv):
-    """Deterministic evaluation of the current policy on the first evaluation seeds, as curve points."""
+    """Deterministic evaluation of the current policy on the first evaluation seeds, as curve points.
+
+    The episodes run side by side, one policy call for all of them per step."""
     if not spec.evaluate.periodic_every:
         return None
-    env = FastEnv(spec)
     seeds = [spec.evaluate.seed + i for i in range(spec.evaluate.periodic_episodes)]
+    envs = [FastEnv(spec) for _ in seeds]
 
     def run_evaluation() -> dict[str, float]:
-        summary, _ = evaluate(env, policy_function(model, venv), seeds)
+        summary = evaluate_batched(envs, batch_policy(model, venv), seeds)
         return {
             "eval/success_rate": summary["success_rate"],
             "eval/subtasks": summary["subtasks_completed"],

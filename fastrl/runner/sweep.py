@@ -163,9 +163,8 @@ def run_trial(config: dict) -> None:
         else:
             if run.is_dir():  # a failed or interrupted attempt that left no checkpoint
                 shutil.rmtree(run)
-            start_run(
-                Path(config["sweep"]) / "spec.yaml", trial_overrides(trial), console=quiet, progress=False, into=run
-            )
+            overrides = [*trial_overrides(trial), f"train.workers={cpus}"]  # no env processes beyond its CPUs
+            start_run(Path(config["sweep"]) / "spec.yaml", overrides, console=quiet, progress=False, into=run)
         info = {"trial": trial, "node_id": node, "host": socket.gethostname(), "pid": os.getpid()}
         info |= {"wall_s": time.perf_counter() - t0, "torch_threads": torch.get_num_threads()}
         (run / "trial.json").write_text(json.dumps(info, indent=2))

@@ -82,6 +82,13 @@ class Train(BaseModel):
     timesteps: int = Field(500_000, ge=1)
     n_envs: int = Field(8, ge=1, le=256)
     seed: int = Field(0, ge=0)
+    workers: int = Field(
+        2,
+        ge=1,
+        le=64,
+        description="processes stepping the envs in batches, this one included (at most one per CPU and env); "
+        "the trajectories do not depend on it",
+    )
     ppo: PPOParams = PPOParams()
     sac: SACParams = SACParams()
     normalize: Normalize = Normalize()

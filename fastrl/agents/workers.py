@@ -1,0 +1,209 @@
+"""Vectorised envs split across processes: this one steps a batch of envs while worker processes step the rest."""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import signal
+from collections.abc import Callable
+
+import gymnasium as gym
+import numpy as np
+from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
+
+
+class FreshInfoVecEnv(DummyVecEnv):
+    """DummyVecEnv without the deep copy of infos: FastEnv builds fresh info dicts every step."""
+
+    def step_wait(self):
+        """Step every env, resetting finished ones, in SB3's VecEnv convention."""
+        for i, env in enumerate(self.envs):
+            obs, self.buf_rews[i], terminated, truncated, info = env.step(self.actions[i])
+            self.buf_dones[i] = terminated or truncated
+            info["TimeLimit.truncated"] = truncated and not terminated
+            if self.buf_dones[i]:
+                info["terminal_observation"] = obs
+                obs, self.reset_infos[i] = env.reset()
+            self.buf_infos[i] = info
+            self._save_obs(i, obs)
+        return self._obs_from_buf(), np.copy(self.buf_rews), np.copy(self.buf_dones), list(self.buf_infos)
+
+
+def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int) -> None:
+    """A worker's loop: step, reset and query its batch of envs on the parent's commands until told to stop.
+
+    It ignores SIGINT and SIGTERM (a Ctrl-C reaches the whole process group; the parent decides and then closes
+    the pipe) and ends when the pipe closes, so it never outlives its parent. The parent's ends of the pipes,
+    inherited by the fork, are closed first: else the pipe would never read as closed.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    for end in parent_ends:
+        end.close()
+    venv = FreshInfoVecEnv([make_env for _ in range(n)])
+    try:
+        while True:
+            command, arg = conn.recv()
+            if command == "step":
+                venv.step_async(arg)
+                conn.send(venv.step_wait())
+            elif command == "reset":
+                venv._seeds, venv._options = arg
+                obs = venv.reset()
+                conn.send((obs, venv.reset_infos))
+            elif command == "get_attr":
+                conn.send(venv.get_attr(arg))
+            elif command == "set_attr":
+                conn.send(venv.set_attr(*arg))
+            elif command == "env_method":
+                name, args, kwargs = arg
+                conn.send(venv.env_method(name, *args, **kwargs))
+            elif command == "env_is_wrapped":
+                conn.send(venv.env_is_wrapped(arg))
+            else:  # "close"
+                break
+    except (EOFError, BrokenPipeError, ConnectionResetError):  # the parent is gone
+        pass
+    finally:
+        venv.close()
+        conn.close()
+
+
+class SplitVecEnv(VecEnv):
+    """`n_envs` envs stepped by `processes` processes: this one holds the first batch, each worker one more.
+
+    Env i behaves as env i of a FreshInfoVecEnv of the same envs (same seeds, same order of results), so the
+    split changes the speed, never the trajectories. Workers are forked daemons that ignore Ctrl-C and SIGTERM
+    and exit when the pipe to this process closes.
+    """
+
+    def __init__(self, *, make_env: Callable[[], gym.Env], n_envs: int, processes: int):
+        batches = [len(b) for b in np.array_split(np.arange(n_envs), max(1, min(processes, n_envs)))]
+        self.local = FreshInfoVecEnv([make_env for _ in range(batches[0])])
+        methods = mp.get_all_start_methods()
+        ctx = mp.get_context("fork" if "fork" in methods else "spawn")
+        self.batches, self.pipes, self.procs = batches, [], []
+        for n in batches[1:]:
+            parent, child = ctx.Pipe()
+            ends = [*self.pipes, parent] if ctx.get_start_method() == "fork" else []
+            proc = ctx.Process(target=_serve, args=(child, ends, make_env, n), daemon=True, name="fastrl-envs")
+            proc.start()
+            child.close()
+            self.pipes.append(parent)
+            self.procs.append(proc)
+        self.waiting = False
+        self.closed = False
+        super().__init__(n_envs, self.local.observation_space, self.local.action_space)
+
+    def _slices(self) -> list[slice]:
+        """The env indices of each process's batch, this process's first."""
+        ends = np.cumsum(self.batches)
+        return [slice(int(e - n), int(e)) for n, e in zip(self.batches, ends)]
+
+    def _ask(self, command: str, arg=None) -> list:
+        """Send one command to every worker and collect their answers, in order."""
+        for pipe in self.pipes:
+            pipe.send((command, arg))
+        return [pipe.recv() for pipe in self.pipes]
+
+    def step_async(self, actions: np.ndarray) -> None:
+        """Hand each worker its actions; this process steps its own batch in step_wait meanwhile."""
+        parts = self._slices()
+        for pipe, part in zip(self.pipes, parts[1:]):
+            pipe.send(("step", actions[part]))
+        self.waiting = True
+        self.local.step_async(actions[parts[0]])
+
+    def step_wait(self):
+        """Step this process's batch, then gather the workers' results."""
+        results = [self.local.step_wait()]
+        results += [pipe.recv() for pipe in self.pipes]
+        self.waiting = False
+        obs, rews, dones, infos = zip(*results)
+        return np.concatenate(obs), np.concatenate(rews), np.concatenate(dones), [i for part in infos for i in part]
+
+    def reset(self):
+        """Reset every env with the pending seeds and options."""
+        parts = self._slices()
+        for pipe, part in zip(self.pipes, parts[1:]):
+            pipe.send(("reset", (self._seeds[part], self._options[part])))
+        self.local._seeds, self.local._options = self._seeds[parts[0]], self._options[parts[0]]
+        obs = [self.local.reset()]
+        infos = [self.local.reset_infos]
+        for pipe in self.pipes:
+            o, i = pipe.recv()
+            obs.append(o)
+            infos.append(i)
+        self.reset_infos = [i for part in infos for i in part]
+        self._reset_seeds()
+        self._reset_options()
+        return np.concatenate(obs)
+
+    def close(self) -> None:
+        """Stop the workers (draining a step in flight, as after Ctrl-C) and wait for them."""
+        if self.closed:
+            return
+        self.closed = True
+        for pipe in self.pipes:
+            try:
+                if self.waiting and pipe.poll(10):  # a step stopped by Ctrl-C: its answer, before the command
+                    pipe.recv()
+                pipe.send(("close", None))
+            except (EOFError, BrokenPipeError, ConnectionResetError):
+                pass
+            pipe.close()
+        for proc in self.procs:
+            proc.join(timeout=5)
+            if proc.is_alive():
+                proc.terminate()
+                proc.join()
+        self.local.close()
+
+    def _split(self, indices) -> list[list[int]]:
+        """Global env indices per process, as each process's local indices."""
+        wanted = set(self._get_indices(indices))
+        return [[i - p.start for i in range(p.start, p.stop) if i in wanted] for p in self._slices()]
+
+    def get_attr(self, attr_name: str, indices=None) -> list:
+        """An attribute of each env."""
+        if not hasattr(self, "local"):
+            return []
+        picked = self._split(indices)
+        out = self.local.get_attr(attr_name, picked[0])
+        for pipe, local in zip(self.pipes, picked[1:]):
+            pipe.send(("get_attr", attr_name))
+            values = pipe.recv()
+            out += [values[i] for i in local]
+        return out
+
+    def set_attr(self, attr_name: str, value, indices=None) -> None:
+        """Set an attribute on each env."""
+        picked = self._split(indices)
+        self.local.set_attr(attr_name, value, picked[0])
+        for pipe, local in zip(self.pipes, picked[1:]):
+            if local:
+                pipe.send(("set_attr", (attr_name, value, local)))
+                pipe.recv()
+
+    def env_method(self, method_name: str, *method_args, indices=None, **method_kwargs) -> list:
+        """Call a method of each env."""
+        picked = self._split(indices)
+        out = self.local.env_method(method_name, *method_args, indices=picked[0], **method_kwargs)
+        for pipe, local in zip(self.pipes, picked[1:]):
+            if local:
+                pipe.send(("env_method", (method_name, method_args, {**method_kwargs, "indices": local})))
+                out += pipe.recv()
+        return out
+
+    def env_is_wrapped(self, wrapper_class, indices=None) -> list[bool]:
+        """Whether each env is wrapped by the class."""
+        picked = self._split(indices)
+        out = self.local.env_is_wrapped(wrapper_class, picked[0])
+        for pipe, local in zip(self.pipes, picked[1:]):
+            pipe.send(("env_is_wrapped", wrapper_class))
+            values = pipe.recv()
+            out += [values[i] for i in local]
+        return out
+
+    def get_images(self):
+        """Not rendered during training."""
+        raise NotImplementedError("SplitVecEnv does not render")
