@@ -6,8 +6,8 @@
     python bench/assess_cohort.py --across docs/assess_cohort.json /tmp/s1.json   # level-means tau-b per seed
 
 For each task: a cohort (`fastrl cohort SPEC --levels 5 --per-level 10`, written once under
-runs/bench-assess/<task>/cohort) is scored with each inverse-RL run of bench/irl_tasks.py
-(runs/bench-irl/<task>/*-{gail,airl}-ppo-s0: its learned reward r_psi and value V_phi) by the same code as
+runs/bench-assess/<task>/cohort) is scored with each inverse-RL run of bench/irl_tasks.py (the newest GAIL and
+AIRL runs of the seed under runs/bench-irl/<task>: its learned reward r_psi and value V_phi) by the same code as
 `fastrl score --run RUN cohort/`. Prints, per task, the Table 1-style mean ± sd per level of the normalised
 scores (0 = random policy, 1 = scripted expert) and Kendall tau-b (with 95% bootstrap CI) of each score against
 the true level. Timing: a TraceLines cohort of 5 x 20 = 100 trajectories scored (replay included) with the AIRL
@@ -48,9 +48,12 @@ def cohort_dir(task: str, levels: int, per_level: int) -> Path:
 
 
 def irl_run(task: str, algorithm: str, root: Path, seed: int = 0) -> Path | None:
-    """The newest inverse-RL run of bench/irl_tasks.py under root for a task, algorithm and training seed."""
-    found = sorted(Path(root, task).glob(f"*-{algorithm}-ppo-s{seed}"))
-    return found[-1] if found else None
+    """The newest inverse-RL run of bench/irl_tasks.py under root for a task, algorithm and training seed: a sweep's
+    trial (ROOT/TASK/<time>-sweep/cN_algorithm=ALGO_sSEED) or an older run (ROOT/TASK/<time>-ALGO-ppo-sSEED)."""
+    base = Path(root, task)
+    found = [*base.glob(f"*-{algorithm}-ppo-s{seed}"), *base.glob(f"*-sweep/c*_algorithm={algorithm}_s{seed}")]
+    found = [f for f in found if (f / "eval.json").exists()]
+    return max(found, key=lambda f: f.relative_to(base).parts[0], default=None)  # the newest by its time stamp
 
 
 def score_task(task: str, levels: int, per_level: int, root: Path, seed: int = 0) -> dict:

@@ -5,8 +5,12 @@
 
 Variants: `full` (spectral normalisation + discriminator trained on the current rollout only),
 `no-current-rollout` (spectral norm, discriminator trained on samples of the whole replay buffer),
-`no-spectral-norm` (current rollout, plain discriminator). Every run is a real run directory under --root with
-a deterministic evaluation on 10 seeds every --eval-every steps, the same budget for all (no early stop). The report
+`no-spectral-norm` (current rollout, plain discriminator). `run` is one sweep (fastrl.runner.sweep, on Ray Tune:
+a local Ray, or a cluster with --address) whose configurations are the variants and whose trials are variant x
+seed, each a real run directory under ROOT/<time>-sweep/ with a deterministic evaluation on 10 seeds every
+--eval-every steps, the same budget for all (no early stop); --cpus-per-trial CPUs (and torch threads) each. An
+interrupted sweep continues with `fastrl sweep --resume ROOT/<time>-sweep`. The report reads every run under
+ROOT (sweep trials and the older ROOT/VARIANT/tracelines/* runs alike; the variant from each run's spec) and
 prints a table (mean and spread over seeds of the final evaluation, steps to 90% of the expert) and writes a
 figure of subtasks completed over steps. The defaults are those of docs/irl_fig5.png (rates actions, 60k steps,
 4 envs with one update per 4 steps); `--mode continuous --schedule 8x32 --steps 100000 --eval-every 25000 --root
@@ -26,7 +30,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from irl_tasks import curve, plot_mean_range, save_figure
+from irl_tasks import curve, finished_runs, plot_mean_range, save_figure
 
 VARIANTS = {
     "full": ["irl.discriminator.spectral_norm=true", "irl.discriminator.current_rollout=true"],
@@ -69,25 +73,38 @@ SCHEDULES = {  # SAC schedules of bench/sac_speed.py
 
 
 def run(args) -> None:
-    """Train every (variant, seed) asked for, one after another."""
-    from fastrl.runner import start_run
+    """One sweep: the variants asked for x the seeds, each trial an ordinary run."""
+    from datetime import UTC, datetime
 
-    for seed in args.seeds:
-        for variant in args.variants:
-            root = Path(args.root) / variant
-            sets = [
-                *COMMON,
-                *SCHEDULES[args.schedule],
-                *VARIANTS[variant],
-                f"actions.mode={args.mode}",
-                f"train.seed={seed}",
-                f"train.timesteps={args.steps}",
-                f"evaluate.periodic_every={args.eval_every}",
-                *args.set,
-            ]
-            t0 = time.perf_counter()
-            path = start_run("specs/tracelines.yaml", sets, root, progress=not args.quiet)
-            print(f"{variant} seed {seed}: {path} in {time.perf_counter() - t0:.0f} s", flush=True)
+    from fastrl.runner.sweep import create_sweep, run_sweep
+    from fastrl.runner.sweep_table import write_results
+
+    base = [
+        *COMMON,
+        *SCHEDULES[args.schedule],
+        f"actions.mode={args.mode}",
+        f"train.timesteps={args.steps}",
+        f"evaluate.periodic_every={args.eval_every}",
+        *args.set,
+    ]
+    settings = [dict(kv.split("=", 1) for kv in VARIANTS[v]) for v in args.variants]
+    folder = Path(args.root) / f"{datetime.now(UTC).strftime('%Y%m%dT%H%M%SZ')}-sweep"
+    t0 = time.perf_counter()
+    create_sweep(Path("specs/tracelines.yaml"), base, {}, args.seeds, args.cpus_per_trial, folder, settings)
+    failed = run_sweep(folder, args.address)
+    write_results(folder, failed)
+    print(f"{folder} in {time.perf_counter() - t0:.0f} s, {len(failed)} failed", flush=True)
+    for f in failed:
+        print(f"  {f['trial']} failed twice: {f['error']}", flush=True)
+
+
+def variant_of(run_dir: Path) -> str | None:
+    """The variant a run trained, from its resolved spec (None if it is none of them)."""
+    import yaml
+
+    disc = yaml.safe_load((run_dir / "spec.yaml").read_text())["irl"]["discriminator"]
+    mine = {f"irl.discriminator.{k}={str(disc[k]).lower()}" for k in ("spectral_norm", "current_rollout")}
+    return next((v for v, sets in VARIANTS.items() if set(sets) == mine), None)
 
 
 def report(args) -> None:
@@ -102,14 +119,14 @@ def report(args) -> None:
     print("|---|---|---|---|---|---|")
     fig, ax = plt.subplots(figsize=(7, 4.2))
     rows = []
+    found = finished_runs(Path(args.root))
     for variant in VARIANTS:
-        runs = sorted((Path(args.root) / variant).glob("*/*/eval.json"))
+        runs = [r for r in found if variant_of(r) == variant]
         if not runs:
             continue
         finals, success, to90, fps, curves = [], [], [], [], []
-        for ev_path in runs:
-            run_dir = ev_path.parent
-            ev = json.loads(ev_path.read_text())
+        for run_dir in runs:
+            ev = json.loads((run_dir / "eval.json").read_text())
             meta = json.loads((run_dir / "meta.json").read_text())
             steps, subs, _ = curve(run_dir)
             finals.append(ev["agent"]["subtasks_completed"])
@@ -164,9 +181,17 @@ def main() -> None:
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="more spec overrides")
     ap.add_argument("--eval-every", type=int, default=10_000, help="steps between evaluations during training")
     ap.add_argument("--root", default="runs/bench-offpolicy-rates")
-    ap.add_argument("--figure", default="docs/irl_fig5.png")
-    ap.add_argument("--quiet", action="store_true")
+    ap.add_argument(
+        "--figure",
+        help="default: docs/irl_fig5.png for the default root, else ROOT/fig5.png (so a report on a probe's root "
+        "leaves the published figure alone)",
+    )
+    ap.add_argument("--address", help="Ray cluster to run on (default: RAY_ADDRESS, else a local Ray)")
+    ap.add_argument("--cpus-per-trial", type=int, default=1, help="CPUs and torch threads of each run")
     args = ap.parse_args()
+    if args.figure is None:
+        default_root = Path(args.root) == Path(ap.get_default("root"))
+        args.figure = "docs/irl_fig5.png" if default_root else str(Path(args.root) / "fig5.png")
     run(args) if args.command == "run" else report(args)
 
 

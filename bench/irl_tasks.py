@@ -1,13 +1,16 @@
 """GAIL, AIRL (PPO generator) and BC from 20 scripted-expert demonstrations, next to PPO on the heuristic reward.
 
-    python bench/irl_tasks.py run --tasks tracelines --algos gail airl ppo     # train (real `fastrl run`s)
+    python bench/irl_tasks.py run --tasks tracelines --algos gail airl ppo --seeds 0 1 2  # a `fastrl sweep` per task
     python bench/irl_tasks.py report                                          # table + figure from the runs
 
-Every run is a real run directory under --root (default runs/bench-irl) with periodic deterministic evaluation
-(10 seeds every 50k steps), a 3M-step cap, and early stop once an evaluation completes every subtask. The report
-gives, per task and algorithm: steps and wall time until an evaluation reached 90% of the expert's subtask
-completion, the final evaluation on 20 seeds, and a figure of evaluation subtasks over steps (the paper's Fig. 4).
-Run two processes at once on a 2-core machine (e.g. split by task); each run uses one core.
+`run` makes one sweep per task (fastrl.runner.sweep, on Ray Tune: a local Ray, or a cluster with --address) whose
+configurations are the algorithms and whose trials are algorithm x seed, each a real run directory under
+ROOT/TASK/<time>-sweep/ with periodic deterministic evaluation (10 seeds every 50k steps), a 3M-step cap, and early
+stop once an evaluation completes every subtask; --cpus-per-trial CPUs (and torch threads) each, so a 2-core machine
+runs two at once. An interrupted sweep continues with `fastrl sweep --resume ROOT/TASK/<time>-sweep`. The report
+reads every run under ROOT/TASK (sweep trials and the older run directories alike) and gives, per task and
+algorithm: steps and wall time until an evaluation reached 90% of the expert's subtask completion, the final
+evaluation on 20 seeds, and a figure of evaluation subtasks over steps (the paper's Fig. 4).
 """
 
 from __future__ import annotations
@@ -26,32 +29,42 @@ TASKS = ["imagecentring", "periscoping", "tracelines"]
 ALGOS = ["ppo", "gail", "airl", "bc"]
 
 
-def overrides(algo: str, seed: int, cap: int) -> list[str]:
-    """The spec changes of one benchmark run."""
-    out = [
+IRL_ALGORITHM = {"ppo": "none", "gail": "gail", "airl": "airl", "bc": "bc"}  # irl.algorithm of each
+
+
+def overrides(cap: int) -> list[str]:
+    """The spec changes every benchmark run shares."""
+    return [
         f"train.timesteps={cap}",
-        f"train.seed={seed}",
-        "evaluate.periodic_every=50000",
+        f"evaluate.periodic_every={min(50000, cap)}",
         "evaluate.periodic_episodes=10",
         "evaluate.stop_at_subtasks=1.0",
-        "train.checkpoint_every=50000",
+        f"train.checkpoint_every={min(50000, cap)}",
         "train.keep_checkpoints=100",
         "evaluate.image_every=8",
         "evaluate.record_episodes=5",
     ]
-    return out + ([f"irl.algorithm={algo}"] if algo != "ppo" else [])
 
 
 def run(args) -> None:
-    """Train every (task, algorithm) asked for, one after another."""
-    from fastrl.runner import start_run
+    """A sweep per task: the algorithms asked for x the seeds, each trial an ordinary run."""
+    from datetime import UTC, datetime
 
+    from fastrl.runner.sweep import create_sweep, run_sweep
+    from fastrl.runner.sweep_table import write_results
+
+    stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
+    settings = [{"irl.algorithm": IRL_ALGORITHM[a]} for a in args.algos]
     for task in args.tasks:
-        for algo in args.algos:
-            t0 = time.perf_counter()
-            changes = overrides(algo, args.seed, args.cap) + (args.set if algo in ("gail", "airl") else [])
-            path = start_run(Path("specs") / f"{task}.yaml", changes, args.root, progress=not args.quiet)
-            print(f"{task} {algo}: {path} in {time.perf_counter() - t0:.0f} s", flush=True)
+        t0 = time.perf_counter()
+        folder = Path(args.root) / task / f"{stamp}-sweep"
+        spec = Path("specs") / f"{task}.yaml"
+        create_sweep(spec, overrides(args.cap) + args.set, {}, args.seeds, args.cpus_per_trial, folder, settings)
+        failed = run_sweep(folder, args.address)
+        write_results(folder, failed)
+        print(f"{task}: {folder} in {time.perf_counter() - t0:.0f} s, {len(failed)} failed", flush=True)
+        for f in failed:
+            print(f"  {f['trial']} failed twice: {f['error']}", flush=True)
 
 
 def curve(run_dir: Path) -> tuple[list[int], list[float], list[float]]:
@@ -87,9 +100,16 @@ def save_figure(fig, path: str, rows) -> None:
 
 
 def algo_of(run_dir: Path) -> str:
-    """ppo, gail or airl, from the run directory name."""
-    name = run_dir.name.split("-", 1)[1]
-    return name.split("-")[0]
+    """ppo, gail, airl or bc, from the run's resolved spec (whatever the directory is called)."""
+    import yaml
+
+    irl = yaml.safe_load((run_dir / "spec.yaml").read_text())["irl"]["algorithm"]
+    return "ppo" if irl == "none" else irl
+
+
+def finished_runs(folder: Path) -> list[Path]:
+    """Every finished run directory under a folder: a sweep's trials and older runs made one by one."""
+    return sorted(f.parent for f in Path(folder).rglob("eval.json") if (f.parent / "meta.json").exists())
 
 
 def report(args) -> None:
@@ -99,7 +119,7 @@ def report(args) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    present = [task for task in TASKS if any((Path(args.root) / task).glob("*/eval.json"))]
+    present = [task for task in TASKS if finished_runs(Path(args.root) / task)]
     if not present:
         raise SystemExit(f"no finished runs under {args.root}")
     rows, fig = [], plt.figure(figsize=(4.4 * len(present), 3.8))
@@ -115,8 +135,7 @@ def report(args) -> None:
     for k, task in enumerate(present):  # a panel per task that has runs
         ax = fig.add_subplot(1, len(present), k + 1)
         runs = sorted(
-            (f.parent for f in (Path(args.root) / task).glob("*/eval.json")),
-            key=lambda d: (ALGOS.index(algo_of(d)), d.name),
+            finished_runs(Path(args.root) / task), key=lambda d: (ALGOS.index(algo_of(d)), d.name)
         )  # same order and colours in every panel
         for run_dir in runs:
             algo = algo_of(run_dir)
@@ -176,21 +195,23 @@ def main() -> None:
     ap.add_argument("mode", choices=["run", "report"])
     ap.add_argument("--tasks", nargs="+", default=TASKS, choices=TASKS)
     ap.add_argument("--algos", nargs="+", default=ALGOS, choices=ALGOS)
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seeds", nargs="+", type=int, default=[0], help="training seeds (each a trial)")
     ap.add_argument("--cap", type=int, default=3_000_000, help="step budget per run")
     ap.add_argument("--root", default="runs/bench-irl")
+    ap.add_argument("--address", help="Ray cluster to run on (default: RAY_ADDRESS, else a local Ray)")
+    ap.add_argument("--cpus-per-trial", type=int, default=1, help="CPUs and torch threads of each run")
     ap.add_argument(
         "--figure",
         help="default: docs/irl_fig4.png for the default root, else ROOT/fig4.png (so a "
         "report on a probe's root leaves the published figure alone)",
     )
-    ap.add_argument("--quiet", action="store_true", help="no progress bars")
     ap.add_argument(
         "--set",
         nargs="*",
         default=[],
         metavar="KEY=VALUE",
-        help="spec overrides for the GAIL and AIRL runs, e.g. irl.discriminator.history=200000",
+        help="spec overrides for every run, e.g. irl.discriminator.history=200000 (irl.* settings reach the "
+        "inverse-RL runs only)",
     )
     args = ap.parse_args()
     if args.figure is None:

@@ -1,6 +1,8 @@
 """Scoring trajectories: kinematic scores, ranking statistics, replay scores and `fastrl score` end to end."""
 
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -271,6 +273,29 @@ def test_scoring_in_two_processes_gives_the_same_report_in_the_same_order(scorer
         reports.append({k: v for k, v in json.loads(out.read_text()).items() if k != "seconds"})
     assert reports[0] == reports[1] and [r["file"] for r in reports[1]["trajectories"]] == ["t0", "t1", "t2", "t3"]
     assert len(reports[1]["problems"]) == 1 and "t1b.npz" in reports[1]["problems"][0]
+
+
+def test_a_run_scored_in_two_processes_gives_the_same_report_and_this_process_never_imports_torch(airl_run, tmp_path):
+    scorer = Scorer(load_spec(airl_run / "spec.yaml"))
+    for i, (level, noise) in enumerate(((2, 0.0), (1, 0.7), (2, 0.2))):
+        degraded(scorer, 20 + i, noise, level).save(tmp_path / "in" / f"t{i}.npz")
+    here = tmp_path / "here" / "scores.json"
+    assess([tmp_path / "in"], run=airl_run, output=here, reference_episodes=1, pictures=False, parallel=False)
+    two = tmp_path / "two" / "scores.json"
+    script = (  # a fresh interpreter: this one has torch already
+        "import json, sys; from pathlib import Path; from fastrl.runner.assessment import assess; "
+        f"assess([Path({str(tmp_path / 'in')!r})], run=Path({str(airl_run)!r}), output=Path({str(two)!r}), "
+        "reference_episodes=1, progress=False, parallel=True); "
+        "print(json.dumps([m for m in ('torch', 'stable_baselines3', 'ray', 'pandas', 'matplotlib.pyplot') "
+        "if m in sys.modules]))"
+    )
+    res = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert json.loads(res.stdout.splitlines()[-1]) == []  # the worker imported torch and pyplot, not this process
+    reports = [{k: v for k, v in json.loads(p.read_text()).items() if k != "seconds"} for p in (here, two)]
+    assert reports[0] == reports[1]  # bit for bit: each trajectory's networks evaluated alone, in either process
+    assert all(r["reward_raw"] is not None and r["value_raw"] is not None for r in reports[1]["trajectories"])
+    assert (two.parent / "scores_paths.png").stat().st_size > 10_000 and two.with_suffix(".rrd").exists()
 
 
 def test_expert_paths_from_the_helper_process_are_the_ones_computed_here(scorer):

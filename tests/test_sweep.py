@@ -65,6 +65,20 @@ def test_grid_plan_names_every_trial_and_bad_grids_are_one_line_errors(tmp_path)
     assert "train.n_envs" in res.output and "Traceback" not in res.output
 
 
+def test_configurations_listed_one_by_one_are_the_trials_not_their_product(tmp_path):
+    sn, cr = "irl.discriminator.spectral_norm", "irl.discriminator.current_rollout"
+    variants = [{sn: "true", cr: "true"}, {sn: "true", cr: "false"}, {sn: "false", cr: "true"}]  # Fig. 5's three
+    folder = create_sweep(spec_file("tracelines"), SWEEP_TINY, {}, [0, 1], 1, tmp_path / "s", variants)
+    manifest = json.loads((folder / "sweep.json").read_text())
+    assert [c["setting"] for c in manifest["configs"]] == variants and len(manifest["trials"]) == 6
+    assert manifest["grid"] == {sn: ["true", "false"], cr: ["true", "false"]}  # the results table's columns
+    assert trial_overrides(manifest["trials"][5]) == [f"{sn}=false", f"{cr}=true", "train.seed=1"]
+    with pytest.raises(SweepError, match="same keys"):
+        create_sweep(spec_file("tracelines"), SWEEP_TINY, {}, [0], 1, tmp_path / "t", [{sn: "true"}, {cr: "true"}])
+    with pytest.raises(SweepError, match="not both"):
+        create_sweep(spec_file("tracelines"), SWEEP_TINY, {sn: ["true"]}, [0], 1, tmp_path / "u", variants)
+
+
 def test_sweep_on_a_two_node_cluster_runs_trials_on_both_nodes(cluster, tmp_path):
     folder = tmp_path / "sweep"
     args = [str(spec_file("tracelines")), *sets(), "--grid", "train.ppo.learning_rate=1e-3,3e-4", "--seeds", "0"]

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_write
+from ..data.recordings import load_recordings
 from ..data.replay import expert_trajectories, rollout_trajectory
 from ..spec import spec_hash, task_hash
 from .scoring import NORMALISED, Scorer
@@ -75,6 +76,25 @@ def reference_scores(
         cache.parent.mkdir(parents=True, exist_ok=True)
         cache.write_text(json.dumps(out, indent=2))
     return out
+
+
+def learned_from(scorer: Scorer) -> list | None:
+    """The recordings a run learned from (its `irl.demonstrations.path`), best heuristic return first; None when
+    it learned from the scripted expert or from nothing: then the scripted expert is the reference."""
+    folder = scorer.spec.irl.demonstrations.path
+    if not scorer.learned or folder is None or not Path(folder).is_dir():
+        return None
+    recordings = [t for _, t in load_recordings([folder])[0]]
+    if not recordings:
+        return None
+    heuristic = [scorer.score(t).scores["heuristic"] for t in recordings]
+    return [recordings[i] for i in sorted(range(len(recordings)), key=lambda i: -heuristic[i])]
+
+
+def references_for(scorer: Scorer, episodes: int, cache: Path | None) -> tuple[dict, list | None]:
+    """The reference scores (see reference_scores) and the recordings learned from (see learned_from)."""
+    recordings = learned_from(scorer)
+    return reference_scores(scorer, episodes, cache, recordings), recordings
 
 
 def _reward_identity(scorer: Scorer) -> str | None:

@@ -13,6 +13,7 @@ from .scoring import HIGHER_IS_BETTER, LEARNED, NORMALISED, SCORES, Scorer, Traj
 
 COLUMNS = SCORES
 TOUR_COLUMNS = ("economy", "safety", "contacts")  # abdomen scenes only
+SCORING_ERRORS = (TrajectoryError, ValueError, OSError)  # a file that raises one is reported, the rest scored
 
 
 def trajectory_files(paths: Iterable[Path]) -> list[Path]:
@@ -31,12 +32,17 @@ def score_files(
     for f in files:
         try:
             scored.append(scorer.score_file(f))
-        except (TrajectoryError, ValueError, OSError) as e:
-            text = str(e)
-            problems.append(text if str(f) in text else f"{f}: {text}")
+        except SCORING_ERRORS as e:
+            problems.append(problem_text(f, e))
         if on_file is not None:
             on_file(f)
     return scored, problems
+
+
+def problem_text(path: Path, error: Exception) -> str:
+    """Why a file was not scored, naming it."""
+    text = str(error)
+    return text if str(path) in text else f"{path}: {text}"
 
 
 def row(s: TrajectoryScores) -> dict:

@@ -75,17 +75,22 @@ class Scorer:
     """Replays trajectories in one compiled task and scores them; learned scores need a run's networks."""
 
     def __init__(self, spec: TaskSpec, networks=None):
+        self.spec = spec
+        self.attach(networks)
+        self.env = FastEnv(spec)
+        self.kin = Kinematics(self.env.task)
+        self.anatomy = None
+        if spec.scene.kind == "abdomen":
+            self.anatomy = cKDTree(anatomy_vertices(spec.scene))
+
+    def attach(self, networks) -> None:
+        """Score with a run's networks from now on (None: heuristic and kinematic scores only)."""
         if networks is not None:
             import torch
 
             torch.set_num_threads(1)  # small MLPs on one trajectory: extra threads cost 50x on a busy machine
-        self.spec, self.networks = spec, networks
-        self.env = FastEnv(spec)
-        self.kin = Kinematics(self.env.task)
+        self.networks = networks
         self.learned = networks is not None and networks.kind is not None
-        self.anatomy = None
-        if spec.scene.kind == "abdomen":
-            self.anatomy = cKDTree(anatomy_vertices(spec.scene))
 
     def tip_path(self, portal: np.ndarray) -> np.ndarray:
         """Camera positions along portal coordinates (forward kinematics on a scratch copy)."""
@@ -93,6 +98,12 @@ class Scorer:
 
     def score(self, traj: Trajectory, name: str = "") -> TrajectoryScores:
         """Replay and score one trajectory."""
+        scored, obs = self.replayed(traj, name)
+        self.add_learned(scored, obs)
+        return scored
+
+    def replayed(self, traj: Trajectory, name: str = "") -> tuple[TrajectoryScores, np.ndarray]:
+        """Replay one trajectory and score all but the learned scores; also its observations (for add_learned)."""
         tips = []
         obs, infos, rewards = replay(self.env, traj, lambda u: tips.append(u.state.tip_pos))
         n = len(obs)
@@ -110,29 +121,53 @@ class Scorer:
         }
         if self.anatomy is not None:
             scores.update(tour_metrics(tip, [i["contacts"] for i in infos], self.anatomy, self.spec.scene.radius))
-        values = None
-        if self.learned:
-            scores["reward"] = float(self.networks.reward(obs).sum())
-            values = self.networks.value(obs).astype(float)
-            scores["value"] = float(values.mean())
-            if self.networks.has_potential:
-                scores["potential"] = float(self.networks.potential(obs).mean())
         meta = {
             **traj.meta,
             "success": bool(last["success"]),
             "subtasks_done": int(last["subtask"]),
             "subtasks_total": int(last["subtasks_total"]),
         }
-        return TrajectoryScores(name or str(traj.meta.get("subject", "")), meta, scores, time, tip, values)
+        return TrajectoryScores(name or str(traj.meta.get("subject", "")), meta, scores, time, tip), obs
 
-    def score_file(self, path: Path) -> TrajectoryScores:
-        """Load, check and score one file (resampled to the control rate if it is off that grid); TrajectoryError
-        or ValueError name the file and the problem."""
+    def add_learned(self, scored: TrajectoryScores, obs: np.ndarray) -> None:
+        """Fill the learned reward, value and potential of a replayed trajectory (nothing without learned networks)."""
+        if self.learned:
+            with_learned(scored, learned_scores(self.networks, obs))
+
+    def load_file(self, path: Path) -> Trajectory:
+        """Load and check one file, resampled to the control rate if it is off that grid; TrajectoryError or
+        ValueError name the file and the problem."""
         traj = Trajectory.load(path)
         problem = foreign_problem(traj, self.spec)
         if problem:
             raise TrajectoryError(f"{path}: {problem}")
-        return self.score(to_control_rate(traj, self.spec.episode.control_hz), Path(path).stem)
+        return to_control_rate(traj, self.spec.episode.control_hz)
+
+    def score_file(self, path: Path) -> TrajectoryScores:
+        """Load, check and score one file (see load_file)."""
+        return self.score(self.load_file(path), Path(path).stem)
+
+    def replay_file(self, path: Path) -> tuple[TrajectoryScores, np.ndarray]:
+        """Load, check and replay one file, all but the learned scores; also its observations."""
+        return self.replayed(self.load_file(path), Path(path).stem)
+
+
+def learned_scores(networks, obs: np.ndarray) -> dict:
+    """Learned return, mean value and mean potential of one trajectory's observations, and the value of each state
+    ("values"); each trajectory is evaluated as one batch, so its numbers never depend on the others."""
+    values = networks.value(obs).astype(float)
+    return {
+        "reward": float(networks.reward(obs).sum()),
+        "value": float(values.mean()),
+        "potential": float(networks.potential(obs).mean()) if networks.has_potential else None,
+        "values": values,
+    }
+
+
+def with_learned(scored: TrajectoryScores, learned: dict) -> None:
+    """Fill a trajectory's learned scores and per-state values from learned_scores' dict."""
+    scored.values = learned["values"]
+    scored.scores.update({k: v for k, v in learned.items() if k != "values"})
 
 
 def normalise(scored: list[TrajectoryScores], references: dict) -> None:

@@ -11,13 +11,10 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from .network_files import has_networks as has_networks  # re-exported: its old home
+
 FORMAT = "fastrl.networks/1"
 HEADER_KEY = "fastrl"  # the safetensors header metadata key holding the JSON description
-
-
-def has_networks(directory: Path) -> bool:
-    """Whether a folder holds exported networks (a policy, in either file format)."""
-    return any((Path(directory) / f"policy.{ext}").is_file() for ext in ("safetensors", "json"))
 
 
 def file_sha256(path: Path) -> str:

@@ -3,20 +3,46 @@
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+from matplotlib import colormaps  # not pyplot: the colour map alone
 
 from ..model.compiler import CompiledTask
 from .scene import log_scene
 
 
+def skip_pandas_probe() -> None:
+    """Make pyarrow skip its pandas probe in this process. Rerun converts every logged array with pyarrow, which
+    imports pandas (0.4-0.8 s) on its first conversion only to ask whether the input is a pandas object; Rerun never
+    passes one. pyarrow remembers the failed import for that question only: anything that needs pandas through
+    pyarrow (to_pandas, from_pandas) still imports it then. Nothing changes where pandas is already imported."""
+    if "pandas" in sys.modules:
+        return
+    import pyarrow as pa
+
+    sys.meta_path.insert(0, _NoPandas())
+    try:
+        pa.array([0])
+    finally:
+        sys.meta_path[:] = [f for f in sys.meta_path if not isinstance(f, _NoPandas)]
+
+
+class _NoPandas:
+    """A meta path finder under which importing pandas fails."""
+
+    def find_spec(self, name, path=None, target=None):
+        """Refuse pandas, pass on everything else."""
+        if name.partition(".")[0] == "pandas":
+            raise ImportError("pandas is hidden from pyarrow's probe")
+        return None
+
+
 def _colours(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """viridis-like RGB (uint8) of values scaled from [lo, hi]."""
-    from matplotlib import colormaps
-
     t = np.clip((values - lo) / max(hi - lo, 1e-12), 0.0, 1.0)
     return (colormaps["viridis"](t)[:, :3] * 255).astype(np.uint8)
 
@@ -65,6 +91,7 @@ def log_assessment(
     path: Path, recording_id: str, task: CompiledTask, scored, report: dict, deviations: dict[str, np.ndarray], group_of
 ) -> Path:
     """Write an .rrd (same recording id as the run, so the viewer shows it with the run) and return its path."""
+    skip_pandas_probe()
     rec = rr.RecordingStream("fastrl", recording_id=recording_id)
     rec.set_log_time_enabled(False)
     rec.save(path)

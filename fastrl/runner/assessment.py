@@ -12,14 +12,12 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from ..assess.figures import deviations, draw_path_figures, group_of, plot_distributions
-from ..assess.references import expert_paths, reference_scores
+from ..assess.references import expert_paths, references_for
 from ..assess.report import build_report, csv_text, group_key, row, score_files, trajectory_files
-from ..assess.scoring import Scorer, normalise
-from ..data.recordings import load_recordings
-from ..irl.networks import has_networks, load_networks
-from ..log.assessment import log_assessment
+from ..assess.scoring import Scorer, TrajectoryScores, normalise, with_learned
+from ..irl.network_files import has_networks
 from ..spec import load_spec
-from .helper import WORKER_SHARE, Helper, split_by_size
+from .helper import Helper, score_shared
 
 
 @dataclass
@@ -31,32 +29,32 @@ class Assessment:
     seconds: dict[str, float] = field(default_factory=dict)
 
 
-def load_scorer(run: Path | None, spec_path: Path | None) -> tuple[Scorer, str | None]:
-    """A scorer for a run (its spec and, after inverse RL, its learned networks) or for a bare spec."""
+@dataclass
+class Scored:
+    """Every file scored (in file order), the problems, and what normalises the scores."""
+
+    scored: list[TrajectoryScores]
+    problems: list[str]
+    references: dict
+    recordings: list | None  # the recordings the run learned from (the upper reference), else None
+    learned: bool
+
+
+def load_scorer(run: Path | None, spec_path: Path | None, networks: bool = True) -> tuple[Scorer, str | None]:
+    """A scorer for a run (its spec and, after inverse RL and if `networks`, its learned networks) or for a bare
+    spec."""
     if run is not None:
         if not (run / "spec.yaml").exists():
             raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
-        networks = None
-        if has_networks(run / "networks"):
-            networks = load_networks(run / "networks")
-        return Scorer(load_spec(run / "spec.yaml"), networks), run.name
+        loaded = None
+        if networks and has_networks(run / "networks"):
+            from ..irl.networks import load_networks
+
+            loaded = load_networks(run / "networks")
+        return Scorer(load_spec(run / "spec.yaml"), loaded), run.name
     if spec_path is None:
         raise FileNotFoundError("give --run RUN_DIR (learned scores) or --spec SPEC (heuristic and kinematic only)")
     return Scorer(load_spec(spec_path)), None
-
-
-def learned_from(scorer: Scorer) -> list | None:
-    """The recordings a run learned from (its `irl.demonstrations.path`), best heuristic return first; None when
-    it learned from the scripted expert or from nothing: then the scripted expert is the reference."""
-    spec = scorer.spec
-    folder = spec.irl.demonstrations.path
-    if not scorer.learned or folder is None or not Path(folder).is_dir():
-        return None
-    recordings = [t for _, t in load_recordings([folder])[0]]
-    if not recordings:
-        return None
-    heuristic = [scorer.score(t).scores["heuristic"] for t in recordings]
-    return [recordings[i] for i in sorted(range(len(recordings)), key=lambda i: -heuristic[i])]
 
 
 def outputs_for(output: Path | None, run: Path | None) -> dict[str, Path]:
@@ -74,6 +72,49 @@ def outputs_for(output: Path | None, run: Path | None) -> dict[str, Path]:
     }
 
 
+def score_here(scorer: Scorer, files: list[Path], episodes: int, cache: Path | None, on_file) -> Scored:
+    """Score every file in this process."""
+    references, recordings = references_for(scorer, episodes, cache)
+    scored, problems = score_files(scorer, files, on_file=lambda _f: on_file())
+    return Scored(scored, problems, references, recordings, scorer.learned)
+
+
+def score_with_helper(
+    helper: Helper,
+    scorer: Scorer,
+    files: list[Path],
+    networks: Path | None,
+    episodes: int,
+    cache: Path | None,
+    on_file,
+    pictures: bool,
+) -> Scored:
+    """Score in two processes taking files from one counter. The worker loads the networks (so this process never
+    imports torch) and the references first, then scores with them; this process replays meanwhile and has the
+    worker evaluate its share's learned scores at the end, each trajectory on its own as in score_here.
+
+    With `pictures`, each process first imports what it will draw with (matplotlib there, Rerun here): the counter
+    shares out the files, so time spent importing now is made up by the other process scoring more."""
+    prepared = helper.prepare(networks, episodes, cache, pictures)
+    theirs = helper.score_share(files)
+    if pictures:
+        from ..log import assessment  # noqa: F401 (Rerun and the colour map)
+
+    def after_file() -> bool:
+        """Show progress; stop early if the worker could not load the networks."""
+        on_file()
+        return prepared.done() and prepared.exception() is not None
+
+    mine = score_shared(files, helper.counter, scorer.replay_file, after_file)
+    learned, references, recordings = prepared.result()  # the worker's error, if any, is raised here
+    replayed = [r for _, r, _ in mine if r is not None]
+    for (s, _), extra in zip(replayed, helper.learned([obs for _, obs in replayed]).result()):
+        with_learned(s, extra)
+    everything = sorted([(i, r and r[0], p) for i, r, p in mine] + theirs.result(), key=lambda e: e[0])
+    scored = [s for _, s, _ in everything if s is not None]
+    return Scored(scored, [p for _, _, p in everything if p is not None], references, recordings, learned)
+
+
 def assess(
     inputs: list[Path],
     run: Path | None = None,
@@ -89,16 +130,14 @@ def assess(
 
     `parallel`: score and draw in a second, forked process (None: when there are enough files and a second core)."""
     console = console or Console(stderr=True)
-    t0 = time.perf_counter()
-    scorer, recording_id = load_scorer(run, spec_path)
-    paths, seconds = outputs_for(output, run), {"load": time.perf_counter() - t0}
-    t0 = time.perf_counter()
-    cache = run / "assessment" / "references.json" if run is not None else None
-    recordings = learned_from(scorer)
-    references = reference_scores(scorer, reference_episodes, cache, recordings)
-    seconds["references"] = time.perf_counter() - t0
     files = trajectory_files(inputs)
-    helper = Helper(scorer) if Helper.worth_it(len(files)) and parallel is not False or parallel else None
+    parallel = Helper.worth_it(len(files)) if parallel is None else parallel
+    t0 = time.perf_counter()
+    scorer, recording_id = load_scorer(run, spec_path, networks=not parallel)
+    paths, seconds = outputs_for(output, run), {"load": time.perf_counter() - t0}
+    networks = run / "networks" if run is not None and has_networks(run / "networks") else None
+    cache = run / "assessment" / "references.json" if run is not None else None
+    helper = Helper(scorer) if parallel else None
     try:
         t0 = time.perf_counter()
         with Progress(
@@ -111,14 +150,17 @@ def assess(
             transient=True,
         ) as bar:
             task = bar.add_task("score", total=len(files))
-            cut = split_by_size(files, WORKER_SHARE) if helper else 0  # the worker: files[:cut]
-            theirs = helper.score(files[:cut], warm=pictures) if helper else None
-            scored, problems = score_files(scorer, files[cut:], on_file=lambda _f: bar.advance(task))
-            if theirs is not None:
-                first, first_problems = theirs.result()
-                scored, problems = first + scored, first_problems + problems
-                bar.advance(task, cut)
-        normalise(scored, references)
+            if helper is not None:
+
+                def taken() -> None:
+                    """Files taken so far, by either process."""
+                    bar.update(task, completed=min(helper.counter.value, len(files)))
+
+                done = score_with_helper(helper, scorer, files, networks, reference_episodes, cache, taken, pictures)
+            else:
+                done = score_here(scorer, files, reference_episodes, cache, lambda: bar.advance(task))
+        scored, recordings = done.scored, done.recordings
+        normalise(scored, done.references)
         seconds["scoring"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         drawing = pictures and bool(scored)
@@ -132,7 +174,7 @@ def assess(
             early = _run(helper, draw_path_figures, scored, devs, by, paths, radius)
             seconds["pictures"] = time.perf_counter() - t0
         t0 = time.perf_counter()
-        report = build_report(scored, references, problems, scorer.learned)
+        report = build_report(scored, done.references, done.problems, done.learned)
         if recordings is not None:  # 1 is the recordings learned from, not the scripted expert
             report["normalisation"] = report["normalisation"].replace("scripted expert", "recordings learned from")
             report["warnings"] = [w.replace("scripted expert", "recordings learned from") for w in report["warnings"]]
@@ -143,6 +185,8 @@ def assess(
         paths["csv"].write_text(csv_text(report))
         result.files["csv"] = paths["csv"]
         if drawing:  # the distributions figure in the helper too while this process writes the recording
+            from ..log.assessment import log_assessment
+
             t0 = time.perf_counter()
             late = _run(helper, plot_distributions, report, paths["distributions"])
             rid = recording_id or f"assessment-{scorer.spec.name}"

@@ -1,35 +1,56 @@
-"""A second process for `fastrl score`: it scores part of the files and draws the figures beside the recording."""
+"""A second process for `fastrl score`, forked before torch is imported: it loads the run's networks, scores files
+taken from a counter shared with this process, evaluates the learned scores of this process's share, and draws the
+figures while this process writes the report and the recording."""
 
 from __future__ import annotations
 
 import multiprocessing
 import os
 import signal
+from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
-from itertools import accumulate
 from pathlib import Path
 
-from ..assess.references import compute_expert_paths
-from ..assess.report import score_files
-from ..assess.scoring import Scorer
+import numpy as np
+
+from ..assess.references import compute_expert_paths, references_for
+from ..assess.report import SCORING_ERRORS, problem_text
+from ..assess.scoring import Scorer, learned_scores
 
 MIN_FILES = 16  # below this, forking costs more than it saves
-# Scoring splits the bytes evenly: the figures can only start once both halves are in, and the worker's pyplot
-# import (0.4 s) runs while this process merges, normalises and builds the report.
-WORKER_SHARE = 0.5
 _SCORER: Scorer | None = None  # the forked worker's copy of the parent's scorer
+_NEXT = None  # the worker's handle on the shared counter
 
 
-def _adopt(scorer: Scorer) -> None:
-    """Worker start: keep the inherited scorer; Ctrl-C is the parent's to handle."""
-    global _SCORER
-    _SCORER = scorer
+def _adopt(scorer: Scorer, counter) -> None:
+    """Worker start: keep the inherited scorer and counter; Ctrl-C is the parent's to handle."""
+    global _SCORER, _NEXT
+    _SCORER, _NEXT = scorer, counter
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _score(files: list[Path]):
-    """Worker side of `Helper.score`."""
-    return score_files(_SCORER, files)
+def _prepare(networks: Path | None, episodes: int, cache: Path | None, pictures: bool) -> tuple:
+    """Worker side of `Helper.prepare`."""
+    if networks is not None:
+        from ..irl.networks import load_networks
+
+        _SCORER.attach(load_networks(networks))
+    prepared = (_SCORER.learned, *references_for(_SCORER, episodes, cache))
+    if pictures:  # import matplotlib now: the files are shared out, so the parent scores more meanwhile
+        from ..assess.figures import _pyplot
+
+        _pyplot()
+    return prepared
+
+
+def _score_share(files: list[Path]) -> list[tuple]:
+    """Worker side of `Helper.score_share`."""
+    return score_shared(files, _NEXT, _SCORER.score_file)
+
+
+def _learned(observations: list[np.ndarray]) -> list[dict]:
+    """Worker side of `Helper.learned`."""
+    return [learned_scores(_SCORER.networks, obs) for obs in observations] if _SCORER.learned else []
 
 
 def _expert(seeds: list[int]):
@@ -37,11 +58,28 @@ def _expert(seeds: list[int]):
     return compute_expert_paths(_SCORER, seeds)
 
 
-def _warm() -> None:
-    """Import pyplot while the parent finishes its share, so the figures start at once."""
-    from ..assess.figures import _pyplot
+def take(counter) -> int:
+    """The index of the next file to score, from the counter both processes share."""
+    with counter.get_lock():
+        index = counter.value
+        counter.value += 1
+    return index
 
-    _pyplot()
+
+def score_shared(
+    files: list[Path], counter, score: Callable, on_file: Callable[[], bool] | None = None
+) -> list[tuple[int, object, str | None]]:
+    """(index, score(file), None), or (index, None, the problem), for each file taken from `counter` until none is
+    left; `on_file()` after each file may return True to stop early."""
+    out = []
+    while (i := take(counter)) < len(files):
+        try:
+            out.append((i, score(files[i]), None))
+        except SCORING_ERRORS as e:
+            out.append((i, None, problem_text(files[i], e)))
+        if on_file is not None and on_file():
+            break
+    return out
 
 
 def cores() -> int:
@@ -49,31 +87,34 @@ def cores() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
-def split_by_size(files: list[Path], share: float = 0.5) -> int:
-    """The index that cuts `files` so that the run before it holds about `share` of the bytes (missing files: 0)."""
-    cum = list(accumulate((f.stat().st_size if f.is_file() else 0 for f in files), initial=0))
-    return min(range(len(cum)), key=lambda k: abs(cum[k] - share * cum[-1]))
-
-
 class Helper:
-    """One forked worker that inherits the parent's scorer: only file names, results and figure data cross over."""
+    """One forked worker that inherits the parent's scorer (without networks: it loads them itself, so torch is
+    imported there only); only file names, observations, results and figure data cross over."""
 
     def __init__(self, scorer: Scorer):
         fork = multiprocessing.get_context("fork")
         self.scorer = scorer
-        self.pool = ProcessPoolExecutor(1, mp_context=fork, initializer=_adopt, initargs=(scorer,))
+        self.counter = fork.Value("q", 0)
+        self.pool = ProcessPoolExecutor(1, mp_context=fork, initializer=_adopt, initargs=(scorer, self.counter))
 
     @staticmethod
     def worth_it(n_files: int) -> bool:
         """Whether a second process pays: enough files, and a second core."""
         return n_files >= MIN_FILES and cores() > 1 and "fork" in multiprocessing.get_all_start_methods()
 
-    def score(self, files: list[Path], warm: bool = True) -> Future:
-        """Score `files` in the worker (a future of score_files' result); then, if `warm`, import pyplot there."""
-        future = self.pool.submit(_score, files)
-        if warm:
-            self.pool.submit(_warm)
-        return future
+    def prepare(self, networks: Path | None, episodes: int, cache: Path | None, pictures: bool = False) -> Future:
+        """Load the networks in the worker (None: none), and matplotlib if `pictures`; a future of (learned,
+        references, recordings learned from) as `references_for` gives them."""
+        return self.pool.submit(_prepare, networks, episodes, cache, pictures)
+
+    def score_share(self, files: list[Path]) -> Future:
+        """Score files taken from the shared counter in the worker, with the learned scores; a future of
+        score_shared's list."""
+        return self.pool.submit(_score_share, files)
+
+    def learned(self, observations: list[np.ndarray]) -> Future:
+        """A future of learned_scores for each trajectory's observations (an empty list without learned networks)."""
+        return self.pool.submit(_learned, observations)
 
     def expert_paths(self, seeds: list[int]) -> dict:
         """The scripted expert's paths on `seeds`, the first half rolled out in the worker, the rest here."""
@@ -87,5 +128,7 @@ class Helper:
         return self.pool.submit(fn, *args)
 
     def close(self) -> None:
-        """Stop the worker (pending work is cancelled)."""
+        """Stop the worker (pending work is cancelled, no further file is taken)."""
+        with self.counter.get_lock():
+            self.counter.value = 2**62
         self.pool.shutdown(wait=True, cancel_futures=True)

@@ -58,11 +58,32 @@ def _label(key: str, value: str) -> str:
     return f"{key.split('.')[-1]}={safe}"
 
 
-def plan(grid: dict[str, list[str]], seeds: list[int]) -> tuple[list[dict], list[dict]]:
-    """The configurations (grid product) and the trials (configuration x seed), each with its directory name."""
+def settings_of(grid: dict[str, list[str]]) -> list[dict[str, str]]:
+    """Every configuration of a grid (its product), as {key: value}."""
+    return [dict(zip(grid, values)) for values in (itertools.product(*grid.values()) if grid else [()])]
+
+
+def grid_of(settings: list[dict[str, str]]) -> dict[str, list[str]]:
+    """The keys that configurations listed one by one set, and their values in order of appearance; a SweepError
+    unless every configuration sets the same keys (the results table has a column per key)."""
+    keys = list(settings[0]) if settings else []
+    grid: dict[str, list[str]] = {k: [] for k in keys}
+    for setting in settings:
+        if set(setting) != set(keys):
+            raise SweepError(f"configuration {setting} sets other keys than {keys}: every one must set the same keys")
+        for k in keys:
+            grid[k] += [] if str(setting[k]) in grid[k] else [str(setting[k])]
+    return grid
+
+
+def plan(
+    grid: dict[str, list[str]], seeds: list[int], settings: list[dict[str, str]] | None = None
+) -> tuple[list[dict], list[dict]]:
+    """The configurations (the grid's product, or `settings` one by one) and the trials (configuration x seed),
+    each with its directory name."""
     configs = []
-    for i, values in enumerate(itertools.product(*grid.values()) if grid else [()]):
-        setting = dict(zip(grid, values))
+    for i, setting in enumerate(settings_of(grid) if settings is None else settings):
+        setting = {k: str(v) for k, v in setting.items()}
         label = "_".join(_label(k, v) for k, v in setting.items()) or "base"
         configs.append({"index": i, "name": f"c{i}_{label}", "setting": setting})
     trials = [
@@ -90,15 +111,30 @@ def is_finished(run: Path) -> bool:
 
 
 def create_sweep(
-    spec_path: Path, overrides: list[str], grid: dict[str, list[str]], seeds: list[int], cpus: int, out: Path
+    spec_path: Path,
+    overrides: list[str],
+    grid: dict[str, list[str]],
+    seeds: list[int],
+    cpus: int,
+    out: Path,
+    settings: list[dict[str, str]] | None = None,
 ) -> Path:
-    """Validate every configuration, write the sweep folder's resolved base spec and manifest; return the folder."""
+    """Validate every configuration, write the sweep folder's resolved base spec and manifest; return the folder.
+
+    `settings`: the configurations one by one ({key: value} each, all setting the same keys) instead of the
+    product of `grid` (then left empty), for combinations a product cannot give (Fig. 5's ablations)."""
     if cpus < 1:
         raise SweepError(f"--cpus-per-trial {cpus}: must be at least 1")
+    if settings is not None:
+        if grid:
+            raise SweepError("give a grid or configurations one by one, not both")
+        if not settings:
+            raise SweepError("no configuration given")
+        grid = grid_of(settings)
     base = load_spec(spec_path, overrides)
     if any(k == "train.seed" for k in grid):
         raise SweepError("--grid train.seed: give seeds with --seeds instead")
-    configs, trials = plan(grid, seeds)
+    configs, trials = plan(grid, seeds, settings)
     for c in configs:
         try:
             compile_task(load_spec(spec_path, [*overrides, *trial_overrides({**c, "seed": seeds[0]})]))

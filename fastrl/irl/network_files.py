@@ -1,0 +1,10 @@
+"""Whether a folder holds exported networks, answered without importing torch (scoring forks before it does)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def has_networks(directory: Path) -> bool:
+    """Whether a folder holds exported networks (a policy, in either file format)."""
+    return any((Path(directory) / f"policy.{ext}").is_file() for ext in ("safetensors", "json"))
