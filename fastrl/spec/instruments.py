@@ -6,7 +6,8 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from .base import NonNeg, Pos, Strict, _fail
+from .base import Pos, Strict, _fail
+from .shaft import Shaft
 
 
 class InstrumentStart(Strict):
@@ -22,31 +23,18 @@ class InstrumentStart(Strict):
     )
 
 
-class Instrument(Strict):
+class Instrument(Shaft):
     """A probe (palpation hook) or grasper: shaft through a portal, the same exact fulcrum chain as the scope."""
 
     name: str = Field(pattern=r"^[A-Za-z][A-Za-z0-9_]*$")
     kind: Literal["probe", "grasper"]
-    portal: str
-    shaft_length: float = Field(0.16, gt=0.05, le=0.5)
     diameter: float = Field(0.003, gt=0.001, le=0.02)
-    insertion: tuple[NonNeg, Pos] = Field((0.01, 0.15), description="tip depth range past the portal (m)")
-    pivot_limit_deg: float = Field(60.0, gt=0, le=85)
     jaw_deg: float = Field(60.0, gt=0, le=120, description="grasper: widest jaw opening (deg)")
     touch: Pos = Field(0.004, le=0.05, description="the tip touches a target within this distance of it (m)")
-    damping: NonNeg = Field(0.05, description="entry-point damping on the portal joints")
-    frictionloss: NonNeg = Field(0.002, description="entry-point dry friction on the portal joints")
     start: InstrumentStart = InstrumentStart()
 
     @model_validator(mode="after")
-    def _ranges(self):
-        lo, hi = self.insertion
-        if lo >= hi:
-            _fail("insertion", f"insertion range must be increasing, got {list(self.insertion)}")
-        if hi >= self.shaft_length:
-            _fail("insertion", f"insertion {hi} m must be shorter than the shaft ({self.shaft_length} m)")
-        if not lo <= self.start.insertion <= hi:
-            _fail("start.insertion", f"start insertion {self.start.insertion} m is outside {list(self.insertion)}")
+    def _jaw(self):
         if self.start.jaw_deg > self.jaw_deg:
             _fail("start.jaw_deg", f"start jaw {self.start.jaw_deg} deg is wider than jaw_deg {self.jaw_deg}")
         return self

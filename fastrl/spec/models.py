@@ -19,6 +19,7 @@ from .irl import IRL
 from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_SECONDS, MAX_SUBTASKS
 from .loose import Cup, LooseBody, loose_errors
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
+from .shaft import Shaft
 from .training import Evaluate, Train
 
 
@@ -35,30 +36,12 @@ class StartPose(Strict):
     )
 
 
-class Scope(Strict):
+class Scope(Shaft):
     """The arthroscope: shaft through a portal, camera at the tip, angled optics."""
 
-    portal: str
     optics_deg: Literal[0, 30, 70] = 30
     fov_deg: float = Field(80.0, ge=20, le=140)
-    shaft_length: float = Field(0.16, gt=0.05, le=0.5)
-    diameter: float = Field(0.004, gt=0.001, le=0.02)
-    insertion: tuple[NonNeg, Pos] = Field((0.01, 0.15), description="tip depth range past the portal (m)")
-    pivot_limit_deg: float = Field(60.0, gt=0, le=85)
-    damping: NonNeg = Field(0.05, description="entry-point damping on the portal joints")
-    frictionloss: NonNeg = Field(0.002, description="entry-point dry friction on the portal joints")
     start: StartPose = StartPose()
-
-    @model_validator(mode="after")
-    def _ranges(self):
-        lo, hi = self.insertion
-        if lo >= hi:
-            _fail("insertion", f"insertion range must be increasing, got {list(self.insertion)}")
-        if hi >= self.shaft_length:
-            _fail("insertion", f"insertion {hi} m must be shorter than the shaft ({self.shaft_length} m)")
-        if not lo <= self.start.insertion <= hi:
-            _fail("start.insertion", f"start insertion {self.start.insertion} m is outside {list(self.insertion)}")
-        return self
 
 
 class Cue(Strict):
