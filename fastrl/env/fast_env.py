@@ -73,6 +73,7 @@ class FastEnv(gym.Env):
         self.lens, self.cable = self.task.lens_qadr, int(self.task.qadr[4])
         self._renderer = None
         self._positions_only = False
+        self.target = [0.0] * self.model.nu  # servo targets: the scope's 5 coordinates, then the instruments'
         self._frames = np.zeros((self.stack, self.obs_dim), np.float32)
         self._reset_targets()
 
@@ -275,7 +276,7 @@ class FastEnv(gym.Env):
         d.qpos[self.task.lens_qadr] = -q[4]
         d.qvel[:] = 0.0
         d.ctrl[:5] = q
-        self.target = q.tolist() + list(self.target[5:] if self.tools is not None and hasattr(self, "target") else [])
+        self.target = q.tolist() + self.target[5:]  # the instruments' servos keep their targets
         self._positions_only = positions_only
         (mujoco.mj_fwdPosition if positions_only else mujoco.mj_forward)(m, d)
 
