@@ -103,7 +103,11 @@ CASES = [
         "got .nan",
     ),
     Case(
-        "huge_integer", sub(IC, "  seed: 0\n", "  seed: 100000000000000000000000000\n"), 75, "train.seed", "too large"
+        "huge_integer",
+        sub(IC, "  seed: 0\n", "  seed: 100000000000000000000000000\n"),
+        line_of(IC, "  seed: 0"),
+        "train.seed",
+        "too large",
     ),
     Case(
         "time_limit_below_one_step",
