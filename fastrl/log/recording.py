@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import threading
 import uuid
 from pathlib import Path
 from typing import Self
@@ -25,6 +26,8 @@ from .metrics import TrainingCurves, summary_markdown  # noqa: E402
 from .scene import default_eye, log_scene  # noqa: E402
 
 FLUSH_TICK_S = 5.0
+DISCONNECT_WAIT_S = 10.0  # a healthy close takes well under this; then the disk is checked
+FULL_DISK_BYTES = 1 << 20  # less free than this: a sink still writing after DISCONNECT_WAIT_S is stuck
 
 
 class RunRecorder:
@@ -118,7 +121,20 @@ class RunRecorder:
         try:
             self.flush()
         finally:
-            self.rec.disconnect()
+            self._disconnect()
+
+    def _disconnect(self) -> None:
+        """Close the file sink; on a full disk, give up on a sink stuck writing (the file stays valid up to its last
+        complete chunk) instead of waiting for ever, and skip Rerun's at-exit flush, which would wait on it too."""
+        closing = threading.Thread(target=self.rec.disconnect, daemon=True)
+        closing.start()
+        closing.join(DISCONNECT_WAIT_S)
+        while closing.is_alive():
+            free = free_bytes(self.path)
+            if free is not None and free < FULL_DISK_BYTES:
+                rr.unregister_shutdown()
+                return
+            closing.join(DISCONNECT_WAIT_S)
 
     def __enter__(self) -> Self:
         """Use as `with RunRecorder(path) as rec:`; closes on exit."""
