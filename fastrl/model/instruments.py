@@ -10,6 +10,7 @@ import numpy as np
 
 from ..spec import geometry as geo
 from ..spec.instruments import Instrument
+from .scope import add_shaft_geoms
 
 TOOL_CONTYPE, TOOL_CONAFFINITY = 2, 3  # collides with the dome, the plate, the scope tip and other tips
 TOOL_RGBA = (0.75, 0.72, 0.45, 1.0)
@@ -72,26 +73,7 @@ def build_instrument(spec: mujoco.MjSpec, inst: Instrument, point: np.ndarray, r
     shaft = pivot.add_body(name=f"{n}_shaft", gravcomp=1)
     _joint(shaft, f"{n}_insertion", SLIDE, [0, 0, 1], ranges[2], inst, 10.0, 2e-2)
     _joint(shaft, f"{n}_roll", HINGE, [0, 0, 1], ranges[3], inst, 0.1, 1e-3)
-    shaft.add_geom(
-        name=f"{n}_shaft",
-        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-        fromto=[0, 0, -inst.shaft_length, 0, 0, -radius],
-        size=[radius, 0, 0],
-        rgba=TOOL_RGBA,
-        mass=0.02,
-        contype=0,
-        conaffinity=0,
-    )
-    shaft.add_geom(
-        name=f"{n}_tip",
-        type=mujoco.mjtGeom.mjGEOM_SPHERE,
-        size=[radius],
-        rgba=TOOL_RGBA,
-        mass=1e-3,
-        contype=TOOL_CONTYPE,
-        conaffinity=TOOL_CONAFFINITY,
-        condim=3,
-    )
+    add_shaft_geoms(shaft, f"{n}_", inst.shaft_length, radius, TOOL_RGBA, (TOOL_CONTYPE, TOOL_CONAFFINITY))
     if inst.kind == "probe":  # the palpation hook: a short bent end, visual only
         shaft.add_geom(
             name=f"{n}_hook",

@@ -70,26 +70,7 @@ def build_scope(spec: mujoco.MjSpec, scope: Scope, point: np.ndarray, rot: np.nd
         damping=0.1 * scope.damping,
         armature=1e-3,
     )
-    shaft.add_geom(
-        name="shaft",
-        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-        fromto=[0, 0, -scope.shaft_length, 0, 0, -radius],
-        size=[radius, 0, 0],
-        rgba=SHAFT_RGBA,
-        mass=0.02,
-        contype=0,
-        conaffinity=0,
-    )
-    shaft.add_geom(
-        name="tip",
-        type=mujoco.mjtGeom.mjGEOM_SPHERE,
-        size=[radius],
-        rgba=SHAFT_RGBA,
-        mass=1e-3,
-        contype=TIP_CONTYPE,
-        conaffinity=TIP_CONAFFINITY,
-        condim=3,
-    )
+    add_shaft_geoms(shaft, "", scope.shaft_length, radius, SHAFT_RGBA, (TIP_CONTYPE, TIP_CONAFFINITY))
     optics = shaft.add_body(name="scope_optics")
     optics.add_joint(
         name="cable",
@@ -154,3 +135,29 @@ def build_scope(spec: mujoco.MjSpec, scope: Scope, point: np.ndarray, rot: np.nd
             ctrllimited=mujoco.mjtLimited.mjLIMITED_TRUE,
         )
         act.set_to_position(kp=gains[name][0], kv=gains[name][1])
+
+
+def add_shaft_geoms(
+    body: mujoco.MjsBody, prefix: str, length: float, radius: float, rgba, tip_collision: tuple[int, int]
+) -> None:
+    """A shaft (visual only) ending at the body's origin in a tip sphere that collides (contype, conaffinity)."""
+    body.add_geom(
+        name=f"{prefix}shaft",
+        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+        fromto=[0, 0, -length, 0, 0, -radius],
+        size=[radius, 0, 0],
+        rgba=rgba,
+        mass=0.02,
+        contype=0,
+        conaffinity=0,
+    )
+    body.add_geom(
+        name=f"{prefix}tip",
+        type=mujoco.mjtGeom.mjGEOM_SPHERE,
+        size=[radius],
+        rgba=rgba,
+        mass=1e-3,
+        contype=tip_collision[0],
+        conaffinity=tip_collision[1],
+        condim=3,
+    )
