@@ -19,6 +19,7 @@ from ..log.recording import recording_problem, repair_recording
 from ..model.compiler import CompiledTask, compile_task
 from ..spec import load_spec
 from ..spec.models import TaskSpec
+from .beside import Beside
 from .evaluate import evaluate, evaluate_batched
 from .learner import build_learner
 from .monitor import TrainingMonitor
@@ -288,14 +289,28 @@ def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: 
         if recorder is not None and i < ev.record_episodes:
             recorder.log_episode(i, ep, task, spec.scope.fov_deg, ev.image_size)
 
-    agent, _ = evaluate(env, policy, seeds, ev.image_every, ev.record_episodes, on_episode=log)
-    out = {"agent": agent, "seeds": seeds}
-    if ev.expert:
-        expert = ScriptedExpert(env)
-        out["expert"], _ = evaluate(env, expert.act, seeds, on_reset=expert.reset)
+    # the scripted expert's episodes do not depend on the agent: with a second CPU they run beside it
+    expert = Beside(lambda: expert_summary(spec, seeds), fork=spec.train.workers > 1) if ev.expert else None
+    try:
+        agent, _ = evaluate(env, policy, seeds, ev.image_every, ev.record_episodes, on_episode=log)
+        out = {"agent": agent, "seeds": seeds}
+        if expert is not None:
+            out["expert"] = expert.result()
+    finally:
+        if expert is not None:
+            expert.cancel()
+        env.close()
     out["eval_seconds"] = time.perf_counter() - t0
-    env.close()
     return out
+
+
+def expert_summary(spec: TaskSpec, seeds: list[int]) -> dict:
+    """The scripted expert's evaluation figures on the given seeds (no images, no recording)."""
+    env = FastEnv(spec)
+    expert = ScriptedExpert(env)
+    summary, _ = evaluate(env, expert.act, seeds, on_reset=expert.reset)
+    env.close()
+    return summary
 
 
 def evaluate_saved(run: Path, episodes: int | None = None) -> dict:
@@ -315,8 +330,6 @@ def evaluate_expert(spec_path, overrides=(), episodes: int | None = None) -> dic
     spec = load_spec(spec_path, overrides)
     ev = spec.evaluate
     seeds = [ev.seed + i for i in range(episodes or ev.episodes)]
-    env = FastEnv(spec)
-    expert = ScriptedExpert(env)
     t0 = time.perf_counter()
-    summary, _ = evaluate(env, expert.act, seeds, on_reset=expert.reset)
+    summary = expert_summary(spec, seeds)
     return {"expert": summary, "seeds": seeds, "eval_seconds": time.perf_counter() - t0}
