@@ -4,6 +4,7 @@ import mujoco
 import numpy as np
 
 from fastrl.model import compile_task
+from fastrl.model.compiler import build_task
 from fastrl.spec import load_spec
 
 from .conftest import spec_file
@@ -72,3 +73,24 @@ def test_angled_optics_tilt_the_view_and_the_cable_sweeps_it_round_a_cone():
         views.append(fwd)
         assert abs(np.degrees(np.arccos(np.clip(axis @ fwd, -1, 1))) - 30.0) < 1e-6
     assert np.linalg.norm(views[0] - views[4]) > 0.9  # opposite sides of the cone
+
+
+def test_a_spec_compiled_again_gets_an_equal_model_of_its_own(task_name):
+    spec = load_spec(spec_file(task_name))
+    first, again = compile_task(spec), compile_task(spec)
+    fresh = build_task(spec)
+    assert again.model is not first.model
+    for name in ("geom_pos", "geom_rgba", "body_pos", "jnt_range", "actuator_gainprm", "opt.timestep"):
+        a, b = (np.asarray(model_field(m, name)) for m in (again.model, fresh.model))
+        np.testing.assert_array_equal(a, b, err_msg=name)
+    first.model.geom_pos[0] += 1.0  # an env moves its avatars: no other env sees it
+    assert not np.array_equal(first.model.geom_pos, again.model.geom_pos)
+    assert not np.array_equal(first.model.geom_pos, compile_task(spec).model.geom_pos)
+
+
+def model_field(model, dotted: str):
+    """A model field by its dotted name."""
+    value = model
+    for part in dotted.split("."):
+        value = getattr(value, part)
+    return value

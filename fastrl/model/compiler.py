@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import copy
+import dataclasses
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -18,11 +21,14 @@ from .targets import Targets, build_targets, resolve_targets
 
 SceneBuilder = Callable[[mujoco.MjSpec, object], dict]
 SCENES: dict[str, SceneBuilder] = {"fast_dome": build_dome, "abdomen": build_abdomen}
+_COMPILED: OrderedDict[str, CompiledTask] = OrderedDict()  # the last tasks compiled, by their spec's JSON
+_KEEP = 8
 
 
 def register_scene(kind: str, builder: SceneBuilder) -> None:
     """Add a scene kind: builder(mjspec, scene) adds geoms and returns {portal: (point, rotation)}."""
     SCENES[kind] = builder
+    _COMPILED.clear()
 
 
 @dataclass
@@ -76,6 +82,17 @@ def build_mjspec(task_spec: TaskSpec) -> tuple[mujoco.MjSpec, dict]:
 
 
 def compile_task(task_spec: TaskSpec) -> CompiledTask:
+    """A compiled task with a MuJoCo model of its own (a spec compiled before is copied, not built again)."""
+    key = task_spec.model_dump_json()
+    base = _COMPILED.get(key)
+    if base is None:
+        base = _COMPILED[key] = build_task(task_spec)
+        while len(_COMPILED) > _KEEP:
+            _COMPILED.popitem(last=False)
+    return dataclasses.replace(base, model=copy.copy(base.model))
+
+
+def build_task(task_spec: TaskSpec) -> CompiledTask:
     """Compile a task spec into a MuJoCo model and its handles."""
     spec, portals = build_mjspec(task_spec)
     model = spec.compile()
