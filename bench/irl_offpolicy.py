@@ -85,6 +85,7 @@ def run(args) -> None:
         f"actions.mode={args.mode}",
         f"train.timesteps={args.steps}",
         f"evaluate.periodic_every={args.eval_every}",
+        f"train.sac.periodic_every={args.eval_every}",
         *args.set,
     ]
     settings = [dict(kv.split("=", 1) for kv in VARIANTS[v]) for v in args.variants]
