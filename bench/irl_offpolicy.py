@@ -14,7 +14,8 @@ ROOT (sweep trials and the older ROOT/VARIANT/tracelines/* runs alike; the varia
 prints a table (mean and spread over seeds of the final evaluation, steps to 90% of the expert) and writes a
 figure of subtasks completed over steps. The defaults are those of docs/irl_fig5.png (rates actions, 60k steps,
 4 envs with one update per 4 steps); `--mode continuous --schedule 8x32 --steps 100000 --eval-every 25000 --root
-runs/bench-offpolicy` gave docs/irl_fig5_continuous.png.
+runs/bench-offpolicy` gave docs/irl_fig5_continuous.png. `--schedule spec` trains the generator with the FAST
+specs' SAC settings (32 envs, 8 updates per 32 steps).
 """
 
 from __future__ import annotations
@@ -62,6 +63,9 @@ SCHEDULES = {  # SAC schedules of bench/sac_speed.py
         "train.sac.lean_update=false",
         "irl.discriminator.every=256",
     ],
+    # the FAST specs' SAC (32 envs, 8 updates per 32 steps, bench/time_to_solve.py --algo SAC); the discriminator
+    # fits every 256 steps on the samples since its last fit
+    "spec": ["train.sac.gradient_steps=8", "irl.discriminator.every=256"],
     # 4 envs, 1 update per 4 steps; the discriminator fits every 256 steps on the samples since its last fit
     "4env-quarter": [
         "train.n_envs=4",
@@ -85,6 +89,7 @@ def run(args) -> None:
         f"actions.mode={args.mode}",
         f"train.timesteps={args.steps}",
         f"evaluate.periodic_every={args.eval_every}",
+        f"train.sac.periodic_every={args.eval_every}",
         *args.set,
     ]
     settings = [dict(kv.split("=", 1) for kv in VARIANTS[v]) for v in args.variants]

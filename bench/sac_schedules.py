@@ -80,6 +80,7 @@ def run(args) -> None:
                 f"train.seed={seed}",
                 f"train.timesteps={args.steps}",
                 f"evaluate.periodic_every={args.eval_every}",
+                f"train.sac.periodic_every={args.eval_every}",
             ]
             t0 = time.perf_counter()
             path = start_run("specs/tracelines.yaml", sets, Path(args.root) / name, progress=not args.quiet)

@@ -1,7 +1,13 @@
-"""Wall time to >= 95% of subtasks per FAST task: `fastrl run` (its spec's PPO) against plain SB3 PPO defaults.
+"""Wall time to >= 95% of subtasks per FAST task: `fastrl run` (its spec's PPO or SAC) against plain SB3 defaults.
 
-    python bench/time_to_solve.py [--tasks imagecentring periscoping tracelines] [--seeds 0 1 2]
+    python bench/time_to_solve.py [--algo PPO] [--tasks imagecentring periscoping tracelines] [--seeds 0 1 2]
                                   [--sb3-seeds 0] [--sb3-cap 180] [--eval-every 10000] [--json OUT]
+    python bench/time_to_solve.py --algo SAC --tasks tracelines --sb3-cap 600 --eval-every 5000
+
+--algo SAC: fastrl's side is `fastrl run SPEC --algo SAC --set actions.mode=rates` (the spec's `train.sac`
+settings), SB3's side stable-baselines3 SAC at its library defaults (1 env, 1 update of batch 256 per step,
+[256, 256], learning_starts 100, no normalisation) on the same `rates` env, with one torch thread (two threads
+make its update 8x slower on a 2-core machine: in its favour).
 
 fastrl: each seed is one `start_run` of specs/<task>.yaml (the code path of `fastrl run SPEC --seed S`, its
 periodic evaluation and early stop as the spec sets them), in a fresh Python process. Time to 95% runs from
@@ -38,6 +44,9 @@ TASKS = ("imagecentring", "periscoping", "tracelines")
 MARK = 0.95
 
 
+ALGO_SETS = {"PPO": [], "SAC": ["train.algo=SAC", "actions.mode=rates"]}  # fastrl's side, before --set
+
+
 def fastrl_side(task: str, seed: int, out: Path, sets: list[str]) -> None:
     """One `fastrl run` in this process; its periodic evaluations (timesteps, subtasks, time) into out."""
     from fastrl.runner import run as run_stage
@@ -65,9 +74,10 @@ def fastrl_side(task: str, seed: int, out: Path, sets: list[str]) -> None:
     out.write_text(json.dumps({"events": events, "final": final, "steps_per_s": steps_per_s, "end": time.time()}))
 
 
-def sb3_side(task: str, seed: int, out: Path, cap: float, every: int) -> None:
-    """Plain SB3 PPO at its defaults on FastEnv, evaluated every `every` steps until 95% or `cap` seconds."""
-    from stable_baselines3 import PPO
+def sb3_side(task: str, seed: int, out: Path, cap: float, every: int, algo: str) -> None:
+    """Plain SB3 PPO or SAC at its defaults on FastEnv, evaluated every `every` steps until 95% or `cap` seconds."""
+    import torch
+    from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.env_util import make_vec_env
 
@@ -75,10 +85,13 @@ def sb3_side(task: str, seed: int, out: Path, cap: float, every: int) -> None:
     from fastrl.runner.evaluate import evaluate_batched
     from fastrl.spec import load_spec
 
-    spec = load_spec(ROOT / "specs" / f"{task}.yaml")
+    spec = load_spec(ROOT / "specs" / f"{task}.yaml", ALGO_SETS[algo])
     seeds = [spec.evaluate.seed + i for i in range(spec.evaluate.periodic_episodes)]
     envs = [FastEnv(spec) for _ in seeds]
-    model = PPO("MlpPolicy", make_vec_env(lambda: FastEnv(spec), seed=seed), seed=seed, device="cpu")
+    if algo == "SAC":
+        torch.set_num_threads(1)
+    learner = {"PPO": PPO, "SAC": SAC}[algo]
+    model = learner("MlpPolicy", make_vec_env(lambda: FastEnv(spec), seed=seed), seed=seed, device="cpu")
     events, clock = [], {"train": 0.0, "since": time.perf_counter(), "next": every}
 
     class Evaluate(BaseCallback):
@@ -132,8 +145,9 @@ def machine() -> str:
 def main() -> None:
     """Both sides per task, then the table."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--algo", choices=list(ALGO_SETS), default="PPO", help="fastrl's spec settings and SB3's class")
     ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
-    ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    ap.add_argument("--seeds", nargs="*", type=int, default=[0, 1, 2])
     ap.add_argument("--sb3-seeds", nargs="*", type=int, default=[0])
     ap.add_argument("--sb3-cap", type=float, default=180.0, help="seconds of SB3 training before giving up")
     ap.add_argument("--eval-every", type=int, default=10_000, help="SB3's steps between evaluations")
@@ -145,17 +159,23 @@ def main() -> None:
     ap.add_argument("--out", type=Path, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.side == "fastrl":
-        return fastrl_side(args.task, args.seed, args.out, args.set)
+        return fastrl_side(args.task, args.seed, args.out, [*ALGO_SETS[args.algo], *args.set])
     if args.side == "sb3":
-        return sb3_side(args.task, args.seed, args.out, args.sb3_cap, args.eval_every)
-    print(f"time to {MARK:.0%} of subtasks  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  {machine()}")
+        return sb3_side(args.task, args.seed, args.out, args.sb3_cap, args.eval_every, args.algo)
+    print(
+        f"{args.algo}: time to {MARK:.0%} of subtasks  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  "
+        f"{machine()}"
+    )
     if args.set:
         print(f"fastrl overrides: {' '.join(args.set)}")
-    report = {"machine": machine(), "tasks": {}}
+    report = {"algo": args.algo, "machine": machine(), "tasks": {}}
     for task in args.tasks:
         rows = {"fastrl": [], "sb3": []}
         for seed in args.seeds:
-            r = child(["--side", "fastrl", "--task", task, "--seed", str(seed), *(f"--set={kv}" for kv in args.set)])
+            r = child(
+                ["--algo", args.algo, "--side", "fastrl", "--task", task, "--seed", str(seed)]
+                + [f"--set={kv}" for kv in args.set]
+            )
             hit = first_at_mark(r["events"], r["start"])
             rows["fastrl"].append({"seed": seed, "hit": hit, "whole": r["exit"] - r["start"], **r})
             print(
@@ -168,6 +188,8 @@ def main() -> None:
         for seed in args.sb3_seeds:
             r = child(
                 [
+                    "--algo",
+                    args.algo,
                     "--side",
                     "sb3",
                     "--task",
@@ -194,11 +216,15 @@ def main() -> None:
                 flush=True,
             )
         times = [r["hit"][1] if r["hit"] else float("inf") for r in rows["fastrl"]]
-        median = statistics.median(times)
         sb3 = [r["hit"][1] for r in rows["sb3"] if r["hit"]]
+        fastrl = (
+            f"fastrl median {statistics.median(times):.1f} s to {MARK:.0%} ({len(times)} seeds), "
+            f"{statistics.median(r['steps_per_s'] for r in rows['fastrl']):.0f} steps/s"
+            if times
+            else "fastrl not run"
+        )
         print(
-            f"{task:14s} fastrl median {median:.1f} s to {MARK:.0%} ({len(times)} seeds), "
-            f"{statistics.median(r['steps_per_s'] for r in rows['fastrl']):.0f} steps/s | SB3 defaults "
+            f"{task:14s} {fastrl} | SB3 defaults "
             + (f"{statistics.median(sb3):.1f} s" if len(sb3) == len(rows["sb3"]) and sb3 else "not reached")
             + f", {statistics.median(r['steps_per_s'] for r in rows['sb3']) if rows['sb3'] else 0:.0f} steps/s"
             f"  (load now {' '.join(Path('/proc/loadavg').read_text().split()[:3])})",

@@ -9,6 +9,7 @@ from stable_baselines3 import SAC
 
 from fastrl.agents.lean_sac import LeanSAC, squashed_sample
 from fastrl.agents.sb3 import build_model, make_vec_env
+from fastrl.runner.run import periodic_every
 from fastrl.spec import load_spec
 
 from .conftest import spec_file
@@ -80,3 +81,14 @@ def test_squashed_sample_matches_sb3_distribution():
 def test_spec_chooses_the_update(lean, cls):
     spec = load_spec(spec_file("tracelines"), [*SETS, f"train.sac.lean_update={str(lean).lower()}"])
     assert type(build_model(spec, make_vec_env(spec, 1, 0))) is cls
+
+
+@pytest.mark.parametrize("algo, cadence", [("PPO", 50_000), ("SAC", 10_000)])
+def test_sac_evaluates_on_its_own_cadence_and_sb3_never_sees_it(algo, cadence):
+    sets = ["train.algo=SAC", "actions.mode=rates"] if algo == "SAC" else []
+    cadences = ["evaluate.periodic_every=50000", "train.sac.periodic_every=10000"]
+    spec = load_spec(spec_file("tracelines"), [*sets, *cadences])
+    assert periodic_every(spec) == cadence
+    assert "periodic_every" not in spec.train.sb3_params()
+    plain = load_spec(spec_file("tracelines"), [*sets, "train.sac.periodic_every=null"])
+    assert periodic_every(plain) == plain.evaluate.periodic_every

@@ -46,7 +46,7 @@ def make_vec_env(spec: TaskSpec, n_envs: int, seed: int, workers: int = 1) -> Ve
 
 def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) -> BaseAlgorithm:
     """The spec's algorithm with its hyperparameters on the vectorised env (`extra`: more SB3 arguments)."""
-    params = {**spec.train.params().model_dump(), **{k: v for k, v in extra.items() if v is not None}}
+    params = {**spec.train.sb3_params(), **{k: v for k, v in extra.items() if v is not None}}
     net, act = params.pop("net_arch"), ACTIVATIONS[params.pop("activation")]
     kind = spec.train.kind
     arch = {"pi": net, kind.critic: net}

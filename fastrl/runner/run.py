@@ -204,7 +204,7 @@ def _stages(
         stats=learner.stats,
         parts=learner.parts,
         evaluator=periodic_evaluator(spec, model, venv),
-        eval_every=ev.periodic_every,
+        eval_every=periodic_every(spec),
         stop_at=ev.stop_at_subtasks,
     )
     monitor.episodes = before.get("episodes", 0)
@@ -256,11 +256,16 @@ def _stages(
     update_meta(run, status="done", eval_seconds=results["eval_seconds"])
 
 
+def periodic_every(spec: TaskSpec) -> int:
+    """Timesteps between evaluations during training (0: none): the algorithm's own cadence, or the spec's."""
+    return getattr(spec.train.params(), "periodic_every", None) or spec.evaluate.periodic_every
+
+
 def periodic_evaluator(spec: TaskSpec, model, venv):
     """Deterministic evaluation of the current policy on the first evaluation seeds, as curve points.
 
     The episodes run side by side, one policy call for all of them per step."""
-    if not spec.evaluate.periodic_every:
+    if not periodic_every(spec):
         return None
     seeds = [spec.evaluate.seed + i for i in range(spec.evaluate.periodic_episodes)]
     envs = [FastEnv(spec) for _ in seeds]

@@ -258,7 +258,11 @@ class TaskSpec(Strict):
     def _reachable(self):
         kind = self.train.kind
         if not kind.discrete and self.actions.mode == "discrete":
-            _fail("train.algo", f"{kind.name} needs continuous actions: set actions.mode: continuous (or rates)")
+            _fail(
+                "train.algo",
+                f"{kind.name} needs continuous actions: set actions.mode: rates (`--set actions.mode=rates`: "
+                "portal rates, where the shipped SAC settings learn) or continuous (tip accelerations)",
+            )
         if self.irl.algorithm == "bc" and kind.off_policy:
             _fail("irl.algorithm", "behavioural cloning trains the PPO policy: set train.algo: PPO")
         observed = self.observation.terms()

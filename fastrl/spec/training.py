@@ -59,6 +59,13 @@ class SACParams(Params):
         description="fastrl's leaner gradient step (same maths as SB3's, tested "
         "equal); false: stable-baselines3's own SAC.train",
     )
+    periodic_every: int | None = Field(
+        None,
+        ge=1,
+        description="timesteps between evaluations during training, in place of evaluate.periodic_every "
+        "(null: that one): SAC trains an order of magnitude fewer steps per second than PPO, and its "
+        "deterministic policy's subtasks swing between evaluations",
+    )
 
 
 class Normalize(BaseModel):
@@ -104,6 +111,10 @@ class Train(BaseModel):
     def params(self) -> Params:
         """The hyperparameters of the chosen algorithm."""
         return getattr(self, self.kind.name.lower())
+
+    def sb3_params(self) -> dict:
+        """The chosen algorithm's hyperparameters that go to stable-baselines3 (and the network)."""
+        return self.params().model_dump(exclude={"periodic_every"})
 
 
 class Evaluate(BaseModel):
