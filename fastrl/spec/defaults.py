@@ -58,6 +58,8 @@ def canonical_dump(spec) -> dict:
     """The spec as JSON data with every algorithm-dependent field that holds its default written as null, so a spec
     hashes the same whether it was resolved or not (old runs and trajectories keep their spec_hash)."""
     data = drop_unused_extensions(spec.model_dump(mode="json"))
+    if data["irl"]["generator"] is None:  # specs without the generator's own settings keep their former hash
+        del data["irl"]["generator"]
     for path, value in algorithm_defaults(spec).items():
         node = data
         for name in path[:-1]:
