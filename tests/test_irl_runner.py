@@ -1,10 +1,12 @@
 """`fastrl irl` and `fastrl run` with an irl section, end to end on tiny budgets of the real thing."""
 
+import io
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+from rich.console import Console
 from safetensors import safe_open
 from typer.testing import CliRunner
 
@@ -13,11 +15,20 @@ from fastrl.data.replay import replay
 from fastrl.data.trajectory import Trajectory
 from fastrl.env import FastEnv
 from fastrl.irl.export import load_networks
+from fastrl.runner.learner import build_learner
 from fastrl.spec import load_spec
 
 from .conftest import spec_file
 from .test_runner import only_run, recorded, rrd_verify
 
+# GAIL and AIRL on PPO learn with irl.generator's settings (the bundled specs have them), apart from train.ppo's
+GENERATOR = [
+    "irl.generator.n_envs=2",
+    "irl.generator.ppo.n_steps=32",
+    "irl.generator.ppo.batch_size=64",
+    "irl.generator.ppo.n_epochs=1",
+    "irl.generator.ppo.net_arch=[24, 24]",
+]
 TINY = [
     "train.n_envs=2",
     "train.ppo.n_steps=64",
@@ -32,6 +43,7 @@ TINY = [
     "irl.demonstrations.expert=2",
     "evaluate.periodic_every=256",
     "evaluate.periodic_episodes=1",
+    *GENERATOR,
 ]
 SAC = [
     "actions.mode=continuous",
@@ -83,6 +95,15 @@ def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
     with safe_open(str(run / "networks" / "reward.safetensors"), "pt") as f:
         disc = json.loads(f.metadata()["fastrl"])["discriminator"]
     assert disc["policy_term"] is ("train.algo=SAC" not in extra)  # AIRL on SAC: f alone by default
+    generator = json.loads((run / "meta.json").read_text()).get("generator")
+    with safe_open(str(run / "networks" / "policy.safetensors"), "pt") as f:
+        widths = {f.get_slice(k).get_shape()[0] for k in f.keys() if k.endswith("0.weight")}
+    if "train.algo=SAC" in extra:  # the generator block is for PPO: SAC learns with train.sac
+        assert generator is None and "generator:" not in res.output and 24 not in widths
+    else:
+        assert generator["source"] == "irl.generator" and generator["n_envs"] == 2
+        assert generator["ppo"]["n_steps"] == 32 and generator["ppo"]["net_arch"] == [24, 24]
+        assert "generator: PPO on 2 envs (irl.generator)" in res.output and widths == {24}
     rewards = nets.reward(obs)
     assert rewards.shape == (len(obs) - 1,) and np.isfinite(rewards).all()
     late = obs.copy()
@@ -206,3 +227,26 @@ def test_resuming_with_a_discriminator_the_spec_no_longer_builds_is_a_clear_erro
     assert res.exit_code == 2 and "parts.pt" in res.output and "does not fit" in res.output, res.output
     assert res.exception is None or isinstance(res.exception, SystemExit)
     assert (run / "recording.rrd").exists() and not list(run.glob("recording.part*.rrd"))  # nothing moved
+
+
+@pytest.mark.parametrize("algorithm", ["none", "airl"])
+def test_gail_airl_learn_with_irl_generator_and_forward_rl_with_train(tmp_path, algorithm):
+    spec = load_spec(
+        spec_file("tracelines"),
+        [*TINY, f"irl.algorithm={algorithm}", "irl.discriminator.ranking=0", "irl.generator.ppo.learning_rate=5e-4"],
+    )
+    learner = build_learner(spec, tmp_path, Console(file=io.StringIO()), progress=False)
+    try:
+        model = learner.model
+        want = (spec.irl.generator.ppo, spec.irl.generator.n_envs) if algorithm == "airl" else (spec.train.ppo, 2)
+        ppo, n_envs = want
+        assert (model.n_envs, model.n_steps, model.batch_size, model.n_epochs) == (
+            n_envs,
+            ppo.n_steps,
+            ppo.batch_size,
+            ppo.n_epochs,
+        )
+        assert model.learning_rate == ppo.learning_rate and model.policy.net_arch["pi"] == ppo.net_arch
+        assert (spec.train.ppo.n_steps, spec.irl.generator.ppo.n_steps) == (64, 32)  # the two really differ
+    finally:
+        learner.venv.close()

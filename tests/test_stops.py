@@ -34,7 +34,14 @@ TINY = [
     "evaluate.image_every=10",
     "episode.time_limit=8",
 ]
-IRL = ["irl.demonstrations.expert=2", "evaluate.image_every=0"]
+IRL = [  # GAIL and AIRL on PPO learn with irl.generator's envs and hyperparameters
+    "irl.demonstrations.expert=2",
+    "evaluate.image_every=0",
+    "irl.generator.n_envs=2",
+    "irl.generator.ppo.n_steps=64",
+    "irl.generator.ppo.batch_size=64",
+    "irl.generator.ppo.n_epochs=1",
+]
 LONG_EVAL = ["evaluate.episodes=3", "evaluate.record_episodes=3", "evaluate.image_every=3"]
 SPEC = str(spec_file("tracelines"))
 STAGES = {

@@ -37,25 +37,28 @@ def make_vec_env(spec: TaskSpec, n_envs: int, seed: int, workers: int = 1) -> Ve
     else:
         venv = FreshInfoVecEnv([lambda: FastEnv(spec) for _ in range(n_envs)])
     venv.seed(seed)
-    norm = spec.train.normalize
+    train = spec.learning()
+    norm = train.normalize
     norm_reward = norm.reward and not spec.irl.enabled
     if norm.obs or norm_reward:
-        venv = VecNormalize(venv, norm_obs=norm.obs, norm_reward=norm_reward, gamma=spec.train.params().gamma)
+        venv = VecNormalize(venv, norm_obs=norm.obs, norm_reward=norm_reward, gamma=train.params().gamma)
     return venv
 
 
 def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) -> BaseAlgorithm:
-    """The spec's algorithm with its hyperparameters on the vectorised env (`extra`: more SB3 arguments)."""
-    params = {**spec.train.sb3_params(), **{k: v for k, v in extra.items() if v is not None}}
+    """The spec's algorithm with the hyperparameters it learns with (`spec.learning()`) on the vectorised env
+    (`extra`: more SB3 arguments)."""
+    train = spec.learning()
+    params = {**train.sb3_params(), **{k: v for k, v in extra.items() if v is not None}}
     net, act = params.pop("net_arch"), ACTIVATIONS[params.pop("activation")]
-    kind = spec.train.kind
+    kind = train.kind
     arch = {"pi": net, kind.critic: net}
     algo = LeanSAC if params.pop("lean_update", False) else ALGOS[kind.name]
     torch.set_num_threads(1)
     return algo(
         "MlpPolicy",
         venv,
-        seed=spec.train.seed if seed is None else seed,
+        seed=train.seed if seed is None else seed,
         verbose=0,
         device="cpu",
         policy_kwargs={"net_arch": arch, "activation_fn": act},

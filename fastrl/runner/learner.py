@@ -25,6 +25,7 @@ from ..model.scope import joint_ranges
 from ..spec.models import TaskSpec
 from .cloned import cloned_actor
 from .demos import write_demos
+from .rundir import update_meta
 
 
 @dataclass
@@ -96,9 +97,23 @@ def demonstrations(spec: TaskSpec, run: Path, console: Console, progress: bool) 
     return prepared.trajectories
 
 
+def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
+    """Print the PPO generator's envs and hyperparameters, and where they come from; keep them in meta.json."""
+    train = spec.learning()
+    source = "irl.generator" if spec.irl.generator is not None else "train"
+    ppo = train.ppo.model_dump()
+    console.print(
+        f"generator: PPO on {train.n_envs} envs ({source}): " + ", ".join(f"{k} {v}" for k, v in ppo.items()),
+        markup=False,
+        highlight=False,
+    )
+    update_meta(run, generator={"source": source, "n_envs": train.n_envs, "ppo": ppo})
+
+
 def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = True) -> Learner:
     """The model (and, learning from demonstrations, the discriminator and its callback) for a run."""
-    venv = make_vec_env(spec, spec.train.n_envs, spec.train.seed, spec.train.workers)
+    train = spec.learning()
+    venv = make_vec_env(spec, train.n_envs, train.seed, train.workers)
     irl = spec.irl
     if irl.algorithm in ("none", "bc"):
         learner = Learner(spec, venv, build_model(spec, venv))
@@ -106,6 +121,8 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
             learner.demos = demonstrations(spec, run, console, progress)
         return learner
     off_policy = spec.train.kind.off_policy
+    if not off_policy:
+        log_generator(spec, run, console)
     model = build_model(spec, venv, replay_buffer_class=RelabelingReplayBuffer if off_policy else None)
     demos = demonstrations(spec, run, console, progress)
     d = irl.discriminator
@@ -113,7 +130,7 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     disc = Discriminator(
         obs_dim,
         irl.algorithm,
-        spec.train.params().gamma,
+        train.params().gamma,
         hidden=tuple(d.hidden),
         spectral=d.spectral_norm,
         absorbing=d.absorbing,

@@ -234,7 +234,7 @@ def _stages(
     state = {"episodes": monitor.episodes, "train_seconds": seconds, "stopped_early": monitor.stopped_early}
     save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state, learner.parts)
     save_checkpoint(run / "final", model, venv, state, learner.parts)
-    save_networks(run / "networks", model, venv, learner.disc, spec.train.params().gamma, learner.snapshots)
+    save_networks(run / "networks", model, venv, learner.disc, spec.learning().params().gamma, learner.snapshots)
     update_meta(
         run,
         status="evaluating",

@@ -60,6 +60,8 @@ def canonical_dump(spec) -> dict:
     data = drop_unused_extensions(spec.model_dump(mode="json"))
     if data["train"]["sac"]["periodic_every"] is None:  # added later: specs without it keep their hash
         del data["train"]["sac"]["periodic_every"]
+    if data["irl"]["generator"] is None:  # specs without the generator's own settings keep their former hash
+        del data["irl"]["generator"]
     for path, value in algorithm_defaults(spec).items():
         node = data
         for name in path[:-1]:

@@ -6,6 +6,8 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from .training import PPOParams, Train
+
 
 class Strict(BaseModel):
     """Frozen, and unknown names are errors."""
@@ -113,6 +115,17 @@ class DiscriminatorSettings(Strict):
     )
 
 
+class Generator(Strict):
+    """GAIL and AIRL's PPO generator: its own envs and hyperparameters, apart from forward RL's `train.ppo`."""
+
+    n_envs: int | None = Field(None, ge=1, le=256, description="parallel envs of the generator; null: train.n_envs")
+    ppo: PPOParams | None = Field(
+        None,
+        description="the generator's PPO hyperparameters; null: train.ppo. Forward RL's are tuned for speed on the "
+        "heuristic reward, and an adversarial reward that moves with every rollout needs gentler steps",
+    )
+
+
 class BehaviourCloning(Strict):
     """Behavioural cloning of the demonstrated actions into the spec's PPO policy."""
 
@@ -127,9 +140,19 @@ class IRL(Strict):
     algorithm: Literal["none", "gail", "airl", "bc"] = "none"
     demonstrations: Demonstrations = Demonstrations()
     discriminator: DiscriminatorSettings = DiscriminatorSettings()
+    generator: Generator | None = Field(None, description="GAIL/AIRL on PPO: the generator's settings; null: train's")
     bc: BehaviourCloning = BehaviourCloning()
 
     @property
     def enabled(self) -> bool:
         """Whether runs learn from demonstrations."""
         return self.algorithm != "none"
+
+
+def learning_train(train: Train, irl: IRL) -> Train:
+    """The train settings a run learns with: `train`, except that GAIL and AIRL on PPO take `irl.generator`'s."""
+    gen = irl.generator
+    if gen is None or irl.algorithm not in ("gail", "airl") or train.algo != "PPO":
+        return train
+    update = {k: v for k, v in (("n_envs", gen.n_envs), ("ppo", gen.ppo)) if v is not None}
+    return train.model_copy(update=update)
