@@ -58,7 +58,8 @@ class FastEnv(gym.Env):
         ]
         self.weights = [float(spec.reward.features[n].weight) for n in self.feature_names]
         self.obs_fns = [OBSERVATION_TERMS[n].fn for n in spec.observation.terms()]
-        self.obs_dim = sum(OBSERVATION_TERMS[n].size for n in spec.observation.terms())
+        coords = [i.coordinates for i in spec.instruments]
+        self.obs_dim = sum(OBSERVATION_TERMS[n].width(coords) for n in spec.observation.terms())
         self.stack = spec.observation.stack
         self.observation_space = spaces.Box(-np.inf, np.inf, (self.obs_dim * self.stack,), np.float32)
         rays = any("rays" in REWARD_FEATURES[n].needs for n in self.feature_names)
