@@ -79,7 +79,12 @@ def with_actions(env, named: list[tuple[str, Trajectory]]) -> Prepared:
                 recovery = recovery or ActionRecovery(u)
                 rec = recovery.recover(traj)
                 traj = Trajectory(
-                    traj.time, traj.portal, {**traj.meta, "actions": "recovered"}, rec.actions, traj.instruments
+                    traj.time,
+                    traj.portal,
+                    {**traj.meta, "actions": "recovered"},
+                    rec.actions,
+                    traj.instruments,
+                    traj.bodies,
                 )
                 out.recovered += 1
                 out.residual += rec.residual.tolist()

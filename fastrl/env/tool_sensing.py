@@ -47,7 +47,7 @@ class ToolSensor:
         s.tools_pos, s.tools_vel, s.tools_quat = _flat(pos), _flat(vel), _flat(quats)
         q = data.qpos[self.qadr]
         s.tool_portal = tuple(q[: len(self.tool.qadr)].tolist())
-        s.tools_portal = tuple((q * self.scale + self.offset).tolist())
+        s.tools_portal = tuple(np.clip(q * self.scale + self.offset, -1.0, 1.0).tolist())  # (a joint limit is soft)
         previous = s.tool_potential
         self.errors(s, model, data)
         s.prev_tool_potential = s.tool_potential if first else previous

@@ -89,5 +89,5 @@ def tool_visible(s: TaskState) -> tuple:
 
 @term(per="coordinate")
 def tool_portal(s: TaskState) -> tuple:
-    """Every instrument's portal coordinates (and a grasper's jaw) scaled to [-1, 1] over their ranges."""
+    """Every instrument's portal coordinates (and a grasper's jaw) scaled to [-1, 1] over their ranges, clipped."""
     return s.tools_portal
