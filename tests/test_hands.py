@@ -198,3 +198,23 @@ def test_teleop_tab_switches_to_the_probe_and_the_attempt_keeps_it(tmp_path):
     assert s.finish()
     traj = Trajectory.load(tmp_path / "a.npz")
     assert traj.instruments.shape == (len(traj.time), 4) and traj.instruments[-1, 2] > traj.instruments[0, 2]
+
+
+@pytest.mark.parametrize("mode", ["discrete", "rates"])
+def test_actions_are_recovered_for_both_hands(mode):
+    from fastrl.data.inverse import ActionRecovery, agreement
+    from fastrl.data.replay import rollout_trajectory
+    from fastrl.data.trajectory import Trajectory
+
+    env = fastrl.make(spec_file("triangulation"), actions={"mode": mode})
+    expert = ScriptedExpert(env)
+    traj, _ = rollout_trajectory(env, expert.act, 1, {"source": "expert"}, expert.reset)
+    traj = Trajectory(traj.time[:120], traj.portal[:120], traj.meta, traj.actions[:119], traj.instruments[:120])
+    bare = Trajectory(traj.time, traj.portal, traj.meta, instruments=traj.instruments)
+    got = ActionRecovery(fastrl.make(spec_file("triangulation"), actions={"mode": mode})).recover(bare)
+    a = agreement(traj.actions, got.actions, mode)
+    tool_moves = np.ptp(traj.instruments, axis=0).max() > 0.01
+    if mode == "discrete":
+        assert tool_moves and a["exact_match"] > 0.95, a  # the probe's actions too, not only the scope's
+    else:
+        assert tool_moves and a["mean_abs_error"] < 0.05, a
