@@ -11,7 +11,7 @@ from .inverse import ActionRecovery, on_control_grid, to_control_rate
 from .trajectory import Trajectory, TrajectoryError, load_files
 
 METHOD = {
-    "discrete": "exact search over the 11 discrete actions",
+    "discrete": "exact search over every discrete action",
     "rates": "least squares through the simulator's step, clipped to the action box",
     "continuous": "least squares through the simulator's step, clipped to the action box",
 }
