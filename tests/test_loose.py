@@ -101,3 +101,60 @@ def test_grasping_pays_once_per_body_and_the_target_jump_is_not_shaped():
             break
     assert info["success"] and grasps.count(1.0) == 3 and sum(grasps) == 0.0
     assert max(np.abs(shaping)) < 1.0  # the tip moves at most a few mm a step: no jump of the target in it
+
+
+def test_replay_places_the_loose_bodies_and_scores_like_the_episode(tmp_path):
+    from fastrl.agents.expert import ScriptedExpert
+    from fastrl.data.replay import replay, rollout_trajectory
+    from fastrl.data.trajectory import Trajectory
+
+    env = fastrl.make(spec_file("loose_bodies"), actions={"mode": "rates"})
+    expert = ScriptedExpert(env)
+    traj, observations = rollout_trajectory(env, expert.act, 2, {"source": "expert"}, expert.reset)
+    assert traj.bodies.shape == (len(traj.time), 3, 7) and traj.meta["subtasks"] == 3
+    loaded = Trajectory.load(traj.save(tmp_path / "t.npz"))
+    np.testing.assert_array_equal(loaded.bodies, traj.bodies)
+    replayed, infos, _ = replay(fastrl.make(spec_file("loose_bodies"), actions={"mode": "rates"}), loaded)
+    np.testing.assert_allclose(replayed, observations, atol=1e-9)
+    assert infos[-1]["success"]
+    without = Trajectory(loaded.time, loaded.portal, loaded.meta, instruments=loaded.instruments)
+    _, infos, _ = replay(fastrl.make(spec_file("loose_bodies"), actions={"mode": "rates"}), without)
+    assert infos[-1]["subtask"] == 0  # the bodies' physics is not in the portal coordinates: they stay put
+
+
+def test_bodies_of_another_task_are_refused(tmp_path):
+    from fastrl.data.replay import replay
+    from fastrl.data.trajectory import Trajectory, TrajectoryError
+
+    env = fastrl.make(spec_file("loose_bodies"))
+    t = np.arange(3) * 0.05
+    q = np.tile(env.unwrapped.portal_coordinates(), (3, 1))
+    with pytest.raises(TrajectoryError, match=r"bodies has 2 loose bodies per sample, the task 3"):
+        replay(env, Trajectory(t, q, {"seed": 0}, bodies=np.zeros((3, 2, 7))))
+    with pytest.raises(TrajectoryError, match=r"bodies must have shape \(3, k, 7\)"):
+        Trajectory(t, q, {"seed": 0}, bodies=np.zeros((3, 2, 3)))
+
+
+def test_recording_shows_the_cup_and_the_bodies_moving(tmp_path):
+    rc = pytest.importorskip("rerun.chunk")
+    from fastrl.agents.expert import ScriptedExpert
+    from fastrl.log import RunRecorder
+    from fastrl.runner.evaluate import record_episode
+
+    env = fastrl.make(spec_file("loose_bodies"), actions={"mode": "rates"}, width=64, height=64)
+    expert = ScriptedExpert(env)
+    ep = record_episode(env, expert.act, seed=2, image_every=100, on_reset=expert.reset)
+    assert ep.bodies.shape == (len(ep.time), 3, 3)
+    cup = env.unwrapped.loose.cup
+    assert np.hypot(*(ep.bodies[-1, :, :2] - cup[:2]).T).max() < 0.016  # every body ends in the cup
+    path = tmp_path / "r.rrd"
+    task = env.unwrapped.task
+    with RunRecorder(path, run_name="loose") as rec:
+        rec.log_scene(task)
+        rec.log_episode(0, ep, task, fov_deg=task.spec.scope.fov_deg)
+    rows = {}
+    for c in rc.RrdReader(path).stream().to_chunks():
+        rows[c.entity_path] = rows.get(c.entity_path, 0) + c.num_rows
+    assert rows["/world/eval/ep_00/loose_bodies"] == len(ep.time)
+    assert rows["/world/scene/cup/floor"] == 1 and rows["/world/scene/cup/wall"] == 1
+    env.close()

@@ -79,7 +79,19 @@ def test_line_steadiness_shaft_and_rays_read_their_fields():
 def test_observation_terms_have_their_declared_sizes():
     s = state(goals=(0.1, 0.2, 0.3))
     for name, term in OBSERVATION_TERMS.items():
-        assert len(term.fn(s)) == term.size, name
+        assert len(term.fn(s)) == term.width([]), name
+    two = state(  # a probe (4 coordinates) and a grasper (5)
+        tools_pos=(0.0,) * 6,
+        tools_quat=(1.0, 0.0, 0.0, 0.0) * 2,
+        tools_vel=(0.0,) * 6,
+        tools_to_target=(0.0,) * 6,
+        tools_touching=(True, False),
+        tools_in_view=(False, True),
+        tools_portal=(0.0,) * 9,
+    )
+    for name, term in OBSERVATION_TERMS.items():
+        assert len(term.fn(two)) == term.width([4, 5]), name
+    assert OBSERVATION_TERMS["tool_tip_pos"].width([4, 5]) == 6 and OBSERVATION_TERMS["tool_portal"].width([4, 5]) == 9
 
 
 def test_target_in_camera_and_horizon_error():

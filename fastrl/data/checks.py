@@ -104,7 +104,7 @@ def npz_members(fh: BinaryIO) -> None:
         if total > MAX_TRAJECTORY_BYTES:
             raise ValueError(f"its arrays decompress to {total:,} bytes, at most {MAX_TRAJECTORY_BYTES:,} are read")
         for info in infos:
-            if info.filename.removesuffix(".npy") in ("time", "portal", "actions", "meta"):
+            if info.filename.removesuffix(".npy") in ("time", "portal", "actions", "meta", "instruments", "bodies"):
                 _npy_header(zf, info)
     fh.seek(0)
 

@@ -27,6 +27,7 @@ class EpisodeRecord:
     subtasks_total: int = 0
     success: bool = False
     tools: np.ndarray | None = None  # (T+1, n, 2, 3) each instrument's tip and shaft end, if the task has any
+    bodies: np.ndarray | None = None  # (T+1, k, 3) LooseBodies' free bodies' centres, if the task has any
 
     @property
     def steps(self) -> int:

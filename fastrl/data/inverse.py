@@ -21,6 +21,7 @@ from .poses import resample
 from .trajectory import Trajectory
 
 WEIGHTS = np.array([180 / math.pi, 180 / math.pi, 1000.0, 180 / math.pi, 180 / math.pi])  # 1 deg ~ 1 mm
+TOOL_WEIGHTS = np.array([180 / math.pi, 180 / math.pi, 1000.0, 180 / math.pi, 180 / math.pi])  # pitch .. jaw
 FD_STEP = 0.05  # finite-difference step in action units
 ITERATIONS = 3  # Gauss-Newton iterations for rates / continuous actions
 DAMPING = 1e-2  # Levenberg-Marquardt damping: directions the next pose hardly sees stay near the last action
@@ -60,6 +61,10 @@ class ActionRecovery:
         self.env = env.unwrapped
         self.mode = self.env.task_spec.actions.mode
         self.base = mujoco.MjData(self.env.model)
+        tools = self.env.task.instruments
+        self.tool_qadr = np.concatenate([t.qadr for t in tools]).astype(int) if tools else np.zeros(0, int)
+        self.tool_ranges = np.concatenate([t.ranges for t in tools]) if tools else np.zeros((0, 2))
+        self.weights = WEIGHTS
 
     def _save(self):
         """The physics, servo targets and (continuous mode) commanded twist."""
@@ -77,7 +82,8 @@ class ActionRecovery:
             u.actions.twist[:] = saved[1]
 
     def _step(self, action) -> np.ndarray:
-        """The env's physics step for one action (as FastEnv.step, without scoring); the next portal pose."""
+        """The env's physics step for one action (as FastEnv.step, without scoring); the next portal pose (and the
+        instruments' coordinates when the recording has them)."""
         u = self.env
         m, d = u.model, u.data
         u.target = u.actions.targets(action, u.target, tuple(d.qpos[u.task.qadr].tolist()), m, d)
@@ -87,12 +93,14 @@ class ActionRecovery:
             mujoco.mj_step(m, d, nstep=u.substeps - 1)
         d.qpos[u.lens] = -d.qpos[u.cable]
         mujoco.mj_step1(m, d)
+        if len(self.weights) > 5:
+            return np.concatenate([d.qpos[u.task.qadr], d.qpos[self.tool_qadr]])
         return d.qpos[u.task.qadr].copy()
 
     def _try(self, saved, action, goal: np.ndarray) -> tuple[np.ndarray, float]:
         """Weighted distance error (vector, and its norm) of one candidate action from the saved state."""
         self._restore(saved)
-        diff = (self._step(action) - goal) * WEIGHTS
+        diff = (self._step(action) - goal) * self.weights
         return diff, float(np.sqrt(diff @ diff))
 
     def _discrete(self, saved, goal: np.ndarray) -> tuple[int, float]:
@@ -108,7 +116,7 @@ class ActionRecovery:
         for _ in range(ITERATIONS):
             if best < 1e-6:
                 break
-            J = np.empty((5, len(a)))
+            J = np.empty((len(goal), len(a)))
             for i in range(len(a)):
                 h = FD_STEP if a[i] < 1.0 - FD_STEP else -FD_STEP
                 e = a.copy()
@@ -125,20 +133,37 @@ class ActionRecovery:
     def recover(self, traj: Trajectory) -> Recovered:
         """The actions between consecutive samples of a recording (at the control rate) and their residuals."""
         u = self.env
-        u.reset(seed=int(traj.meta.get("seed", 0)), options={"portal": traj.portal[0]})
+        options = {"portal": traj.portal[0]}
+        goals, tools = traj.portal, traj.instruments is not None and len(self.tool_qadr) == traj.instruments.shape[1]
+        if tools:  # two hands: every instrument's coordinates are matched too
+            options["instruments"], goals = traj.instruments[0], np.hstack([traj.portal, traj.instruments])
+            kinds = [len(t.qadr) for t in u.task.instruments]
+            self.weights = np.concatenate([WEIGHTS, *[TOOL_WEIGHTS[:k] for k in kinds]])
+        else:
+            self.weights = WEIGHTS
+        if traj.bodies is not None and u.loose is not None:
+            options["bodies"] = traj.bodies[0]
+        u.reset(seed=int(traj.meta.get("seed", 0)), options=options)
         actions, residual = [], []
         previous = np.zeros(u.action_space.shape or (), np.float32)
-        for goal in traj.portal[1:]:
+        for i, goal in enumerate(goals[1:], 1):
             goal = np.asarray(goal, float)
             saved = self._save()
             if self.mode == "discrete":
                 action, dist = self._discrete(saved, goal)
             else:
                 action, dist = self._box(saved, goal, previous)
+                if tools and dist > 1e-6:  # an instrument's servo lead saturates: no gradient back from there
+                    again, d0 = self._box(saved, goal, np.zeros_like(previous))
+                    action, dist = (again, d0) if d0 < dist else (action, dist)
                 previous = action
             self._restore(saved)
             self._step(action)
-            u.data.qpos[u.task.qadr] = np.clip(goal, u.task.ranges[:, 0], u.task.ranges[:, 1])  # teacher forcing
+            u.data.qpos[u.task.qadr] = np.clip(goal[:5], u.task.ranges[:, 0], u.task.ranges[:, 1])  # teacher forcing
+            if tools:
+                u.data.qpos[self.tool_qadr] = np.clip(goal[5:], self.tool_ranges[:, 0], self.tool_ranges[:, 1])
+            if traj.bodies is not None and u.loose is not None:
+                u.loose.place(u.data, traj.bodies[i])
             u.data.qpos[u.lens] = -u.data.qpos[u.cable]
             mujoco.mj_step1(u.model, u.data)
             actions.append(action)

@@ -19,18 +19,23 @@ def episode_steps(
     portal: np.ndarray | None = None,
     on_reset: Callable | None = None,
     instruments: np.ndarray | None = None,
+    bodies: np.ndarray | None = None,
 ) -> Iterator[tuple[np.ndarray, float, dict, object]]:
     """Yield (observation, reward, info, action) at the reset state (reward 0, action None) and after each step.
 
     With `policy` (observation -> action) the env steps until the episode terminates or is truncated; else the
     recorded `portal` coordinates are replayed (the first is the reset pose) until the task terminates or they end,
-    with the `instruments`' coordinates beside them where recorded.
+    with the `instruments`' coordinates and the loose `bodies`' poses beside them where recorded.
     `on_reset()` is called right after the reset."""
     u = env.unwrapped
     if policy is not None:
         obs, info = env.reset(seed=seed)
     else:
-        options = {"portal": portal[0]} if instruments is None else {"portal": portal[0], "instruments": instruments[0]}
+        options = {"portal": portal[0]}
+        if instruments is not None:
+            options["instruments"] = instruments[0]
+        if bodies is not None:
+            options["bodies"] = bodies[0]
         obs, info = u.reset(seed=seed, options=options)
     if on_reset is not None:
         on_reset()
@@ -44,7 +49,8 @@ def episode_steps(
             done = term or trunc
         return
     for i, q in enumerate(portal[1:], 1):
-        obs, reward, term, _, info = u.replay_step(q) if instruments is None else u.replay_step(q, instruments[i])
+        tools = None if instruments is None else instruments[i]
+        obs, reward, term, _, info = u.replay_step(q, tools, None if bodies is None else bodies[i])
         yield obs, reward, info, None
         if term:
             break
@@ -61,6 +67,7 @@ class EpisodeRecorder:
         self.rows: list[tuple] = []
         self.tools: list[np.ndarray] = []
         self.tool_ends = [(t.tip_body, t.spec.shaft_length) for t in self.u.task.instruments]
+        self.bodies: list[np.ndarray] = []
         self.images: dict[int, np.ndarray] = {}
 
     def snapshot(self, reward: float, info: dict) -> int:
@@ -86,6 +93,8 @@ class EpisodeRecorder:
             self.tools.append(
                 np.array([[d.xpos[b], d.xpos[b] - n * d.xmat[b].reshape(3, 3)[:, 2]] for b, n in self.tool_ends])
             )
+        if u.loose is not None:
+            self.bodies.append(u.data.xpos[u.loose.bodies].copy())
         step = len(self.rows) - 1
         if self.image_every and step % self.image_every == 0:
             self.images[step] = self.image(u)
@@ -113,4 +122,5 @@ class EpisodeRecorder:
             subtasks_total=info["subtasks_total"],
             success=bool(info["success"]),
             tools=np.array(self.tools) if self.tools else None,
+            bodies=np.array(self.bodies) if self.bodies else None,
         )

@@ -1,8 +1,9 @@
 """Trajectories with actions to and from Minari datasets (the Gymnasium ecosystem's offline-RL format), on disk only.
 
 An episode holds the observations and heuristic rewards recomputed by replay, the recorded actions, and in its infos
-the portal coordinates and times, so importing gives back the same trajectories; each episode's trajectory metadata
-is kept as JSON in the episode metadata under "fastrl".
+the portal coordinates and times (and, where recorded, the instruments' coordinates and the loose bodies' poses,
+flattened per sample), so importing gives back the same trajectories; each episode's trajectory metadata is kept as
+JSON in the episode metadata under "fastrl".
 """
 
 from __future__ import annotations
@@ -38,16 +39,23 @@ def episode_buffer(env, traj: Trajectory, index: int):
     """One trajectory replayed as a Minari EpisodeBuffer (observations T, actions, rewards, ends T-1)."""
     from minari.data_collector import EpisodeBuffer
 
-    u = env.unwrapped
-    obs, _ = u.reset(seed=int(traj.meta.get("seed", 0)), options={"portal": traj.portal[0]})
-    observations, rewards, term, trunc = [obs], [], False, False
-    for q in traj.portal[1:]:
-        obs, reward, term, trunc, _ = u.replay_step(q)
+    from .loop import episode_steps
+
+    observations, rewards, term = [], [], False
+    seed = int(traj.meta.get("seed", 0))
+    for obs, reward, info, _ in episode_steps(
+        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies
+    ):
         observations.append(obs)
         rewards.append(float(reward))
-        if term:
-            break
+        term = bool(info["success"])
+    rewards = rewards[1:]
     n = len(observations)
+    infos = {"time": np.asarray(traj.time[:n], np.float64)[:, None], "portal": np.asarray(traj.portal[:n], np.float64)}
+    if traj.instruments is not None:
+        infos["instruments"] = np.asarray(traj.instruments[:n], np.float64)
+    if traj.bodies is not None:
+        infos["bodies"] = np.asarray(traj.bodies[:n], np.float64).reshape(n, -1)  # (T, k * 7): arrow keeps 2-D
     ends = np.zeros(n - 1, bool)
     terminations, truncations = ends.copy(), ends.copy()
     terminations[-1], truncations[-1] = bool(term), not term
@@ -59,11 +67,7 @@ def episode_buffer(env, traj: Trajectory, index: int):
         rewards=rewards,
         terminations=terminations.tolist(),
         truncations=truncations.tolist(),
-        # time as (T, 1): Minari 0.5.4's arrow storage cannot decode a per-step scalar info
-        infos={
-            "time": np.asarray(traj.time[:n], np.float64)[:, None],
-            "portal": np.asarray(traj.portal[:n], np.float64),
-        },
+        infos=infos,  # time as (T, 1): Minari 0.5.4's arrow storage cannot decode a per-step scalar info
     )
 
 
@@ -123,7 +127,9 @@ def import_minari(path: Path) -> list[Trajectory]:
         extra = json.loads(meta[META_KEY]) if META_KEY in meta else {"source": "agent"}
         try:
             time = np.asarray(infos["time"]).reshape(-1)
-            out.append(Trajectory(time, infos["portal"], extra, np.asarray(episode.actions)))
+            tools = np.asarray(infos["instruments"]) if "instruments" in infos else None
+            bodies = np.asarray(infos["bodies"]).reshape(len(time), -1, 7) if "bodies" in infos else None
+            out.append(Trajectory(time, infos["portal"], extra, np.asarray(episode.actions), tools, bodies))
         except TrajectoryError as e:
             raise TrajectoryError(f"{data}: episode {episode.id}: {e}") from None
     return out

@@ -11,7 +11,7 @@ from .inverse import ActionRecovery, on_control_grid, to_control_rate
 from .trajectory import Trajectory, TrajectoryError, load_files
 
 METHOD = {
-    "discrete": "exact search over the 11 discrete actions",
+    "discrete": "exact search over every discrete action",
     "rates": "least squares through the simulator's step, clipped to the action box",
     "continuous": "least squares through the simulator's step, clipped to the action box",
 }
@@ -79,7 +79,12 @@ def with_actions(env, named: list[tuple[str, Trajectory]]) -> Prepared:
                 recovery = recovery or ActionRecovery(u)
                 rec = recovery.recover(traj)
                 traj = Trajectory(
-                    traj.time, traj.portal, {**traj.meta, "actions": "recovered"}, rec.actions, traj.instruments
+                    traj.time,
+                    traj.portal,
+                    {**traj.meta, "actions": "recovered"},
+                    rec.actions,
+                    traj.instruments,
+                    traj.bodies,
                 )
                 out.recovered += 1
                 out.residual += rec.residual.tolist()

@@ -18,13 +18,14 @@ def rollout_trajectory(
 ) -> tuple[Trajectory, np.ndarray]:
     """Run one episode and keep its portal coordinates and actions; also return the observations."""
     u = env.unwrapped
-    times, coords, actions, observations, tools = [], [], [], [], []
+    times, coords, actions, observations, tools, bodies = [], [], [], [], [], []
     for step, (obs, _, info, action) in enumerate(episode_steps(env, seed, policy=policy, on_reset=on_reset)):
         if step:
             actions.append(np.asarray(action))
         times.append(info["time"] if step else 0.0)
         coords.append(u.portal_coordinates())
         tools.append(u.instrument_coordinates())
+        bodies.append(u.body_poses())
         observations.append(obs)
     meta = {
         "spec": u.task_spec.name,
@@ -36,7 +37,9 @@ def rollout_trajectory(
         **meta,
     }
     instruments = np.array(tools) if u.task.instruments else None
-    return Trajectory(np.array(times), np.array(coords), meta, np.array(actions), instruments), np.array(observations)
+    loose = np.array(bodies) if u.loose is not None else None
+    traj = Trajectory(np.array(times), np.array(coords), meta, np.array(actions), instruments, loose)
+    return traj, np.array(observations)
 
 
 def expert_trajectories(env, seeds) -> list[Trajectory]:
@@ -52,6 +55,9 @@ def check_ranges(env, traj: Trajectory) -> None:
     n = sum(len(t.qadr) for t in env.unwrapped.task.instruments)
     if traj.instruments is not None and traj.instruments.shape[1] != n:
         problem = f"instruments has {traj.instruments.shape[1]} coordinates per sample, the task's instruments {n}"
+    k = len(env.unwrapped.loose.bodies) if env.unwrapped.loose is not None else 0
+    if traj.bodies is not None and traj.bodies.shape[1] != k:
+        problem = f"bodies has {traj.bodies.shape[1]} loose bodies per sample, the task {k}"
     if problem:
         raise TrajectoryError(problem)
 
@@ -64,7 +70,9 @@ def replay(env, traj: Trajectory, on_sample: Callable | None = None) -> tuple[np
     check_ranges(env, traj)
     observations, infos, rewards = [], [], []
     seed = int(traj.meta.get("seed", 0))
-    for obs, reward, info, _ in episode_steps(env, seed, portal=traj.portal, instruments=traj.instruments):
+    for obs, reward, info, _ in episode_steps(
+        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies
+    ):
         if on_sample is not None:
             on_sample(env.unwrapped)
         observations.append(obs)
@@ -113,7 +121,9 @@ def replay_episode(
     seed = int(traj.meta.get("seed", 0))
     rec = EpisodeRecorder(env, image_every=image_every, image=lambda u: u.render())
     observations = []
-    for obs, reward, info, _ in episode_steps(env, seed, portal=traj.portal, instruments=traj.instruments):
+    for obs, reward, info, _ in episode_steps(
+        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies
+    ):
         observations.append(obs)
         step = rec.snapshot(float(reward), info)
         if on_step is not None:

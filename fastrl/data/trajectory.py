@@ -31,6 +31,7 @@ class Trajectory:
     meta: dict = field(default_factory=dict)  # spec, spec_hash, subject, skill, source, seed, ...
     actions: np.ndarray | None = None  # (T-1, ...) actions between samples, where known
     instruments: np.ndarray | None = None  # (T, n) every instrument's portal coordinates, in spec order, if any
+    bodies: np.ndarray | None = None  # (T, k, 7) LooseBodies' free bodies: position and quaternion (wxyz), if any
 
     def __post_init__(self):
         try:
@@ -40,6 +41,8 @@ class Trajectory:
                 real_array(self.actions, "actions")
             if self.instruments is not None:
                 self.instruments = real_array(self.instruments, "instruments")
+            if self.bodies is not None:
+                self.bodies = real_array(self.bodies, "bodies")
         except ValueError as e:
             raise TrajectoryError(str(e)) from None
         problem = self.problem()
@@ -59,6 +62,10 @@ class Trajectory:
             return f"instruments must have shape ({len(self.time)}, n), got {self.instruments.shape}"
         if self.instruments is not None and not np.all(np.isfinite(self.instruments)):
             return "instruments hold non-finite values"
+        if self.bodies is not None and (self.bodies.ndim != 3 or self.bodies.shape[::2] != (len(self.time), 7)):
+            return f"bodies must have shape ({len(self.time)}, k, 7), got {self.bodies.shape}"
+        if self.bodies is not None and not np.all(np.isfinite(self.bodies)):
+            return "bodies hold non-finite values"
         if np.any(np.diff(self.time) <= 0):
             return "time must increase strictly"
         problem = time_problem(self.time)
@@ -86,6 +93,8 @@ class Trajectory:
             arrays["actions"] = np.asarray(self.actions)
         if self.instruments is not None:
             arrays["instruments"] = self.instruments
+        if self.bodies is not None:
+            arrays["bodies"] = self.bodies
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         return atomic_write(path, lambda f: np.savez_compressed(f, **arrays))
@@ -104,13 +113,14 @@ class Trajectory:
                     meta = parse_meta(z["meta"])
                     actions = z["actions"] if "actions" in z.files else None
                     instruments = z["instruments"] if "instruments" in z.files else None
+                    bodies = z["bodies"] if "bodies" in z.files else None
                     time, portal = z["time"], z["portal"]
         except TrajectoryError:
             raise
         except (OSError, ValueError, zipfile.BadZipFile, EOFError, KeyError, zlib.error, NotImplementedError) as e:
             raise TrajectoryError(f"{path}: {_reason(e)}") from None
         try:
-            return cls(time, portal, meta, actions, instruments)
+            return cls(time, portal, meta, actions, instruments, bodies)
         except TrajectoryError as e:
             raise TrajectoryError(f"{path}: {e}") from None
 

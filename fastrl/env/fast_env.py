@@ -58,7 +58,8 @@ class FastEnv(gym.Env):
         ]
         self.weights = [float(spec.reward.features[n].weight) for n in self.feature_names]
         self.obs_fns = [OBSERVATION_TERMS[n].fn for n in spec.observation.terms()]
-        self.obs_dim = sum(OBSERVATION_TERMS[n].size for n in spec.observation.terms())
+        coords = [i.coordinates for i in spec.instruments]
+        self.obs_dim = sum(OBSERVATION_TERMS[n].width(coords) for n in spec.observation.terms())
         self.stack = spec.observation.stack
         self.observation_space = spaces.Box(-np.inf, np.inf, (self.obs_dim * self.stack,), np.float32)
         rays = any("rays" in REWARD_FEATURES[n].needs for n in self.feature_names)
@@ -93,6 +94,9 @@ class FastEnv(gym.Env):
         if self.tools is not None:
             tq = options.get("instruments")
             self._place_tools(tool_start(self.task, self.np_random) if tq is None else np.asarray(tq, float))
+        if self.loose is not None and options.get("bodies") is not None:
+            self.loose.place(self.data, options["bodies"])
+            mujoco.mj_forward(self.model, self.data)
         self.actions.reset(self.data, self.task.qadr)
         s = self.state
         s.time, s.dwell, s.prev_dwell, s.dwell_best, s.potential = 0.0, 0.0, 0.0, 0.0, 0.0
@@ -121,8 +125,10 @@ class FastEnv(gym.Env):
             raise RuntimeError("physics diverged (non-finite state)")
         return self._advance()
 
-    def replay_step(self, portal, instruments=None):
-        """Place the scope (and instruments) at recorded portal coordinates and score it like a step (for replay)."""
+    def replay_step(self, portal, instruments=None, bodies=None):
+        """Place the scope (instruments, loose bodies) at recorded coordinates and score it like a step (replay)."""
+        if self.loose is not None and bodies is not None:
+            self.loose.place(self.data, bodies)
         self._place(np.asarray(portal, float), positions_only=True)
         if self.tools is not None and instruments is not None:
             self._place_tools(np.asarray(instruments, float), positions_only=True)
@@ -146,6 +152,10 @@ class FastEnv(gym.Env):
     def instrument_coordinates(self) -> np.ndarray:
         """Every instrument's portal coordinates, in spec order (empty without instruments)."""
         return np.concatenate([self.data.qpos[t.qadr] for t in self.task.instruments] or [np.zeros(0)])
+
+    def body_poses(self) -> np.ndarray | None:
+        """LooseBodies' free bodies, (k, 7) position and quaternion (wxyz); None for other tasks."""
+        return None if self.loose is None else self.loose.poses(self.data)
 
     def set_portal_coordinates(self, q) -> None:
         """Place the scope at portal coordinates, at rest, with the servos holding there."""

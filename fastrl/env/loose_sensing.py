@@ -23,6 +23,7 @@ class LooseBodies:
         self.task = task
         self.bodies = [m.body(f"loose_{i}").id for i in range(len(spec.task.bodies))]
         self.joints = [int(m.jnt_qposadr[m.joint(f"loose_{i}").id]) for i in range(len(self.bodies))]
+        self.dofs = [int(m.jnt_dofadr[m.joint(f"loose_{i}").id]) for i in range(len(self.bodies))]
         self.welds = [m.equality(f"hold_{i}").id for i in range(len(self.bodies))]
         self.home = [np.array([*b.at, b.radius + 1e-4, 1.0, 0.0, 0.0, 0.0]) for b in spec.task.bodies]
         self.grasper = next(t for t in task.instruments if t.spec.kind == "grasper")
@@ -39,6 +40,20 @@ class LooseBodies:
             data.eq_active[w] = 0
         self.held, self.jaw = -1, float(data.qpos[self.grasper.qadr[4]])
         self.on_cup = self.switched = False
+
+    def poses(self, data: mujoco.MjData) -> np.ndarray:
+        """Every body's position and quaternion (wxyz), (k, 7)."""
+        return np.array([data.qpos[adr : adr + 7] for adr in self.joints])
+
+    def place(self, data: mujoco.MjData, poses: np.ndarray) -> None:
+        """Put the bodies at recorded poses (k, 7), at rest (replay: their physics is not in the portal coordinates)."""
+        poses = np.asarray(poses, float)
+        if poses.shape != (len(self.joints), 7) or not np.isfinite(poses).all():
+            raise ValueError(f"bodies must be {len(self.joints)} finite poses of 7 numbers, got shape {poses.shape}")
+        for adr, dof, pose in zip(self.joints, self.dofs, poses):
+            q = pose[3:] / (np.linalg.norm(pose[3:]) or 1.0)
+            data.qpos[adr : adr + 7] = np.concatenate([pose[:3], q])
+            data.qvel[dof : dof + 6] = 0.0
 
     def update(self, env, k: int) -> None:
         """Grasp or release body k by the jaw, and move subtask k's target to the body or, once held, the cup."""

@@ -1,4 +1,4 @@
-"""Read the instruments into the task state: the working tip's pose and velocity, its target, its contacts."""
+"""Read the instruments into the task state: every tip's pose, velocity and target vector, contacts."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ TOOL_SCALE = 0.02  # metres of tip-to-target distance per unit of the tool poten
 
 
 class ToolSensor:
-    """Fills the tool fields of a TaskState from MjData; the first instrument is the working one."""
+    """Fills the tool fields of a TaskState from MjData: every instrument's tip; the first is the working one."""
 
     def __init__(self, task: CompiledTask):
         self.task = task
@@ -23,20 +23,31 @@ class ToolSensor:
         self.tips = {t.tip_geom for t in task.instruments}
         self.scope_tip = task.tip_geom
         self.touch = self.tool.spec.touch
+        self.touches = [t.spec.touch for t in task.instruments]
         self.target_radius = task.targets.size
         self.half_fov = math.radians(0.5 * task.spec.scope.fov_deg)
+        self.qadr = np.concatenate([t.qadr for t in task.instruments])
+        lo = np.concatenate([t.ranges[:, 0] for t in task.instruments])
+        hi = np.concatenate([t.ranges[:, 1] for t in task.instruments])
+        self.scale, self.offset = 2.0 / (hi - lo), -2.0 * lo / (hi - lo) - 1.0
 
     def read(self, s: TaskState, model: mujoco.MjModel, data: mujoco.MjData, first: bool) -> None:
-        """Update the tool's tip pose, velocity, contacts and target errors (positions current)."""
-        b = self.tool.tip_body
-        pos = tuple(data.xpos[b].tolist())
+        """Update every tip's pose and velocity, the instruments' coordinates, contacts and target errors."""
+        pos = [tuple(data.xpos[t.tip_body].tolist()) for t in self.task.instruments]
         if first:
-            s.tool_vel = (0.0, 0.0, 0.0)
+            vel = [(0.0, 0.0, 0.0)] * len(pos)
         else:
-            k, p0 = 1.0 / s.dt, s.tool_pos
-            s.tool_vel = ((pos[0] - p0[0]) * k, (pos[1] - p0[1]) * k, (pos[2] - p0[2]) * k)
-        s.tool_pos, s.tool_quat = pos, mat_quat(data.xmat[b].tolist())
-        s.tool_portal = tuple(data.qpos[self.tool.qadr].tolist())
+            k, before = 1.0 / s.dt, s.tools_pos
+            vel = [
+                ((p[0] - before[3 * i]) * k, (p[1] - before[3 * i + 1]) * k, (p[2] - before[3 * i + 2]) * k)
+                for i, p in enumerate(pos)
+            ]
+        quats = [mat_quat(data.xmat[t.tip_body].tolist()) for t in self.task.instruments]
+        s.tool_vel, s.tool_pos, s.tool_quat = vel[0], pos[0], quats[0]
+        s.tools_pos, s.tools_vel, s.tools_quat = _flat(pos), _flat(vel), _flat(quats)
+        q = data.qpos[self.qadr]
+        s.tool_portal = tuple(q[: len(self.tool.qadr)].tolist())
+        s.tools_portal = tuple(np.clip(q * self.scale + self.offset, -1.0, 1.0).tolist())  # (a joint limit is soft)
         previous = s.tool_potential
         self.errors(s, model, data)
         s.prev_tool_potential = s.tool_potential if first else previous
@@ -56,10 +67,27 @@ class ToolSensor:
                 on_target = norm((x - t[0], y - t[1], z - t[2])) <= self.target_radius
                 bad += 0 if self.tool.tip_geom in (g1, g2) and on_target else 1
         s.tool_contacts, s.contacts = bad, scope + bad
-        e = (p[0] - s.cam_pos[0], p[1] - s.cam_pos[1], p[2] - s.cam_pos[2])
-        s.tool_in_view = dot(e, s.cam_fwd) > math.cos(self.half_fov) * max(norm(e), 1e-9)
+        s.tool_in_view = self.in_view(s, p)
         s.tool_ok = s.tool_touching and bad == 0
         s.tool_potential = -s.tool_distance / TOOL_SCALE
+        if len(self.touches) == 1:
+            s.tools_to_target, s.tools_touching, s.tools_in_view = d, (s.tool_touching,), (s.tool_in_view,)
+            return
+        tips = [s.tools_pos[i : i + 3] for i in range(0, len(s.tools_pos), 3)]
+        vectors = [(t[0] - x[0], t[1] - x[1], t[2] - x[2]) for x in tips]
+        s.tools_to_target = _flat(vectors)
+        s.tools_touching = tuple(norm(v) <= r for v, r in zip(vectors, self.touches))
+        s.tools_in_view = tuple(self.in_view(s, x) for x in tips)
+
+    def in_view(self, s: TaskState, p: tuple) -> bool:
+        """Tip position p lies inside the scope's field of view."""
+        e = (p[0] - s.cam_pos[0], p[1] - s.cam_pos[1], p[2] - s.cam_pos[2])
+        return dot(e, s.cam_fwd) > math.cos(self.half_fov) * max(norm(e), 1e-9)
+
+
+def _flat(rows: list[tuple]) -> tuple:
+    """Concatenate tuples."""
+    return tuple(v for row in rows for v in row)
 
 
 def place_tools(task: CompiledTask, data: mujoco.MjData, q: np.ndarray) -> np.ndarray:

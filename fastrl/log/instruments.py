@@ -1,4 +1,4 @@
-"""The instruments of an episode in Rerun: each shaft and tip per step, and each tip's path."""
+"""The instruments of an episode in Rerun: each shaft and tip per step, each tip's path, and the loose bodies."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import rerun as rr
 
 from ..data.episode import EpisodeRecord
 from ..model.compiler import CompiledTask
+from ..model.loose import BODY_RGBA
 from .shapes import rgba
 
 TOOL = rgba((0.75, 0.72, 0.45))
@@ -15,6 +16,8 @@ TOOL_PATH = rgba((0.95, 0.6, 0.2))
 
 def log_instruments(rec: rr.RecordingStream, world: str, ep: EpisodeRecord, index: list, task: CompiledTask) -> None:
     """`{world}/{name}/shaft` and `/tip` on the step timelines, `/path` static; nothing without instruments."""
+    if ep.bodies is not None:
+        _log_bodies(rec, world, ep, index, task)
     if ep.tools is None:
         return
     n = len(ep.time)
@@ -35,3 +38,17 @@ def log_instruments(rec: rr.RecordingStream, world: str, ep: EpisodeRecord, inde
         )
         if n >= 2:
             rec.log(f"{world}/{name}/path", rr.LineStrips3D([tip], radii=0.0006, colors=TOOL_PATH), static=True)
+
+
+def _log_bodies(rec: rr.RecordingStream, world: str, ep: EpisodeRecord, index: list, task: CompiledTask) -> None:
+    """`{world}/loose_bodies`: every free body's centre per step, at its radius, labelled by its index."""
+    centres = np.asarray(ep.bodies, float)
+    n, k = centres.shape[:2]
+    radii = np.array([b.radius for b in task.spec.task.bodies], float)
+    rec.send_columns(
+        f"{world}/loose_bodies",
+        indexes=index,
+        columns=rr.Points3D.columns(
+            positions=centres.reshape(-1, 3), radii=np.tile(radii, n), colors=np.tile(rgba(BODY_RGBA[:3]), (n * k, 1))
+        ).partition(np.full(n, k)),
+    )

@@ -8,6 +8,7 @@ import rerun as rr
 from ..model.abdomen import FLOOR_RGBA, TROCAR_RGBA, WALL_RGBA
 from ..model.compiler import CompiledTask
 from ..model.dome import PLATE_RGBA, PORTAL_RGBA, SHELL_RGBA
+from ..model.loose import CUP_MARK_RGBA, CUP_RGBA
 from ..model.targets import LINE_RGBA
 from ..spec import geometry as geo
 from ..spec.anatomy import organ_mesh
@@ -28,6 +29,27 @@ def log_scene(rec: rr.RecordingStream, task: CompiledTask, root: str = "world") 
         _log_dome(rec, base, scene, task.spec.scope.portal, WALL_RGBA, FLOOR_RGBA, TROCAR_RGBA)
         _log_anatomy(rec, base, scene)
     _log_targets(rec, base, task)
+    if getattr(task.spec.task, "cup", None) is not None:
+        _log_cup(rec, base, task.spec.task.cup)
+
+
+def _log_cup(rec: rr.RecordingStream, base: str, cup) -> None:
+    """LooseBodies' cup: its marked floor and its wall as rings at the floor and the rim."""
+    centre = np.array([*cup.at, 0.0])
+    fv, ft = disk(cup.radius, z=0.0005)
+    rec.log(
+        f"{base}/cup/floor",
+        rr.Mesh3D(
+            vertex_positions=fv + centre,
+            triangle_indices=ft,
+            albedo_factor=rgba(CUP_MARK_RGBA),
+            vertex_normals=np.tile([0.0, 0.0, 1.0], (len(fv), 1)),
+        ),
+        static=True,
+    )
+    up = np.array([0.0, 0.0, 1.0])
+    rims = [ring(centre + [0.0, 0.0, h], up, cup.radius, n=48) for h in (0.0, 0.5 * cup.height, cup.height)]
+    rec.log(f"{base}/cup/wall", rr.LineStrips3D(rims, radii=0.0008, colors=rgba(CUP_RGBA)), static=True)
 
 
 def default_eye(task: CompiledTask) -> tuple[tuple, tuple]:

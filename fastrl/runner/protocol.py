@@ -79,7 +79,9 @@ def write_best(
             paths.append(traj.save(path))
             continue
         meta = {**traj.meta, "actions": "dropped"} if traj.actions is not None else dict(traj.meta)
-        paths.append(Trajectory(traj.time, traj.portal, meta, instruments=traj.instruments).save(path))
+        paths.append(
+            Trajectory(traj.time, traj.portal, meta, instruments=traj.instruments, bodies=traj.bodies).save(path)
+        )
     return paths
 
 

@@ -51,9 +51,14 @@ def instrument_errors(spec) -> list[tuple[tuple, str, object]]:
 
     import numpy as np
 
+    from ..terms import OBSERVATION_TERMS
     from . import geometry as geo
 
-    errors = []
+    errors = [
+        (("observation", "extra", i), f"'{name}' observes the instruments: the spec declares none", name)
+        for i, name in enumerate(spec.observation.extra)
+        if OBSERVATION_TERMS[name].per and not spec.instruments
+    ]
     portals = {p.name: p for p in spec.scene.portals}
     taken = {spec.scope.portal: "the scope"}
     for i, inst in enumerate(spec.instruments):

@@ -336,7 +336,8 @@ class TaskSpec(Strict):
 
     def _columns_without(self, terms: list[str]) -> list[int] | None:
         """Observation columns of every term but these (every frame of a stack); None: all of them."""
-        column_terms = [n for n in self.observation.terms() for _ in range(OBSERVATION_TERMS[n].size)]
+        coords = [i.coordinates for i in self.instruments]
+        column_terms = [n for n in self.observation.terms() for _ in range(OBSERVATION_TERMS[n].width(coords))]
         keep = [i for i, n in enumerate(column_terms * self.observation.stack) if n not in terms]
         return None if len(keep) == len(column_terms) * self.observation.stack else keep
 

@@ -98,7 +98,7 @@ class Session:
         _, info = self.env.reset(seed=self.seed)
         self.info = info
         self.infos.append(info)
-        self.writer.add(0.0, self.env.portal_coordinates(), None, self._tools())
+        self.writer.add(0.0, self.env.portal_coordinates(), None, self._tools(), self.env.body_poses())
         self._cue()
         return info
 
@@ -127,7 +127,7 @@ class Session:
             self.pulled_ticks += 1
         self.info = info
         self.infos.append(info)
-        self.writer.add(info["time"], self.env.portal_coordinates(), action, self._tools())
+        self.writer.add(info["time"], self.env.portal_coordinates(), action, self._tools(), self.env.body_poses())
         self._cue()
         if self.suggest_every and self.env.steps % self.suggest_every == 0:
             self.want_suggestion = True

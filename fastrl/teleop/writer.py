@@ -16,12 +16,21 @@ class AttemptWriter:
 
     def __init__(self, path: Path, meta: dict, every_s: float = 1.0):
         self.path, self.meta, self.every = Path(path), dict(meta), every_s
-        self.time, self.portal, self.actions, self.tools = [], [], [], []
+        self.time, self.portal, self.actions, self.tools, self.bodies = [], [], [], [], []
         self.last_flush = time.monotonic()
 
-    def add(self, t: float, q: np.ndarray, action: int | None, tools: np.ndarray | None = None) -> None:
-        """One sample (the action that led to it; None for the first; the instruments' coordinates, if any)."""
+    def add(
+        self,
+        t: float,
+        q: np.ndarray,
+        action: int | None,
+        tools: np.ndarray | None = None,
+        bodies: np.ndarray | None = None,
+    ) -> None:
+        """One sample (the action that led to it, None for the first; the instruments' and loose bodies', if any)."""
         self.time.append(float(t))
+        if bodies is not None:
+            self.bodies.append(np.asarray(bodies, float).copy())
         if tools is not None:
             self.tools.append(np.asarray(tools, float).copy())
         self.portal.append(np.asarray(q, float).copy())
@@ -37,7 +46,8 @@ class AttemptWriter:
         n = len(self.time)
         actions = np.array(self.actions[-(n - 1) :], np.int64) if len(self.actions) >= n - 1 else None
         tools = np.array(self.tools[:n]) if len(self.tools) >= n else None
-        return Trajectory(np.array(self.time), np.array(self.portal), {**self.meta, **meta}, actions, tools)
+        bodies = np.array(self.bodies[:n]) if len(self.bodies) >= n else None
+        return Trajectory(np.array(self.time), np.array(self.portal), {**self.meta, **meta}, actions, tools, bodies)
 
     def flush(self, **meta) -> Path | None:
         """Write the samples so far (meta updated with `meta`); returns the path once something is saved."""

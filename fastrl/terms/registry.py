@@ -18,6 +18,15 @@ class Term:
     doc: str
     size: int = 1
     needs: tuple[str, ...] = ()
+    per: str = ""  # "instrument": size values per instrument; "coordinate": one per instrument coordinate
+
+    def width(self, coordinates: list[int]) -> int:
+        """Values the term gives for instruments with these coordinate counts (spec order)."""
+        if self.per == "instrument":
+            return self.size * len(coordinates)
+        if self.per == "coordinate":
+            return sum(coordinates)
+        return self.size
 
     def check_params(self, given: dict[str, Any]) -> list[tuple[str, str]]:
         """Return (param, problem) pairs for parameters the function does not take or mistypes."""
@@ -41,13 +50,13 @@ class Registry(dict):
         super().__init__()
         self.kind = kind
 
-    def register(self, fn=None, *, size: int = 1, needs: tuple[str, ...] = ()):
+    def register(self, fn=None, *, size: int = 1, needs: tuple[str, ...] = (), per: str = ""):
         """Register `fn` under its own name; the first argument is the task state."""
 
         def add(f):
             sig = list(inspect.signature(f).parameters.values())[1:]
             doc = (f.__doc__ or "").strip().splitlines()[0] if f.__doc__ else ""
-            self[f.__name__] = Term(f.__name__, f, {p.name: p for p in sig}, doc, size, needs)
+            self[f.__name__] = Term(f.__name__, f, {p.name: p for p in sig}, doc, size, needs, per)
             return f
 
         return add(fn) if fn is not None else add

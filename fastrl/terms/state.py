@@ -66,6 +66,13 @@ class TaskState:
         "prev_tool_potential",
         "tool_holding",
         "prev_tool_holding",
+        "tools_pos",
+        "tools_quat",
+        "tools_vel",
+        "tools_to_target",
+        "tools_touching",
+        "tools_in_view",
+        "tools_portal",
     )
 
     def __init__(self):
@@ -96,6 +103,9 @@ class TaskState:
         self.tool_ok = True  # no instrument: the cue never waits on one
         self.tool_potential = self.prev_tool_potential = 0.0
         self.tool_holding = self.prev_tool_holding = False
+        # every instrument, spec order, flattened (the working one first): what the per-instrument terms read
+        self.tools_pos = self.tools_vel = self.tools_to_target = self.tools_quat = self.tools_portal = ()
+        self.tools_touching = self.tools_in_view = ()
 
     @property
     def distance_error(self) -> float:

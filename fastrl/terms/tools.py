@@ -51,37 +51,43 @@ def tool_holding(s: TaskState) -> tuple:
     return (1.0 if s.tool_holding else 0.0,)
 
 
-@term(size=3)
+@term(size=3, per="instrument")
 def tool_tip_pos(s: TaskState) -> tuple:
-    """Instrument tip position in the world (m)."""
-    return s.tool_pos
+    """Every instrument's tip position in the world (m), spec order."""
+    return s.tools_pos
 
 
-@term(size=4)
+@term(size=4, per="instrument")
 def tool_tip_quat(s: TaskState) -> tuple:
-    """Instrument shaft orientation quaternion (w, x, y, z)."""
-    return s.tool_quat
+    """Every instrument's shaft orientation quaternion (w, x, y, z), spec order."""
+    return s.tools_quat
 
 
-@term(size=3)
+@term(size=3, per="instrument")
 def tool_tip_vel(s: TaskState) -> tuple:
-    """Instrument tip linear velocity (m/s)."""
-    return s.tool_vel
+    """Every instrument's tip linear velocity (m/s), spec order."""
+    return s.tools_vel
 
 
-@term(size=3)
+@term(size=3, per="instrument")
 def tool_to_target(s: TaskState) -> tuple:
-    """Vector from the instrument tip to the current target (m)."""
-    return s.tool_to_target
+    """Vector from every instrument's tip to the current target (m), spec order."""
+    return s.tools_to_target
 
 
-@term(size=1)
+@term(size=1, per="instrument")
 def tool_touching(s: TaskState) -> tuple:
-    """1 while the instrument tip touches the target, else 0."""
-    return (1.0 if s.tool_touching else 0.0,)
+    """1 while an instrument's tip touches the target, else 0; one value per instrument."""
+    return tuple(1.0 if t else 0.0 for t in s.tools_touching)
 
 
-@term(size=1)
+@term(size=1, per="instrument")
 def tool_visible(s: TaskState) -> tuple:
-    """1 while the instrument tip is in the scope's field of view, else 0."""
-    return (1.0 if s.tool_in_view else 0.0,)
+    """1 while an instrument's tip is in the scope's field of view, else 0; one value per instrument."""
+    return tuple(1.0 if v else 0.0 for v in s.tools_in_view)
+
+
+@term(per="coordinate")
+def tool_portal(s: TaskState) -> tuple:
+    """Every instrument's portal coordinates (and a grasper's jaw) scaled to [-1, 1] over their ranges, clipped."""
+    return s.tools_portal
