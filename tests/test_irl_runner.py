@@ -53,6 +53,7 @@ SAC = [
     "train.sac.train_freq=16",
     "train.sac.gradient_steps=4",
     "train.sac.net_arch=[32, 32]",
+    "train.sac.periodic_every=256",  # SAC evaluates on its own cadence (the spec's: every 10k steps)
 ]
 
 
