@@ -8,7 +8,8 @@ Variants: `full` (spectral normalisation + discriminator trained on the current 
 `no-spectral-norm` (current rollout, plain discriminator). `run` is one sweep (fastrl.runner.sweep, on Ray Tune:
 a local Ray, or a cluster with --address) whose configurations are the variants and whose trials are variant x
 seed, each a real run directory under ROOT/<time>-sweep/ with a deterministic evaluation on 10 seeds every
---eval-every steps, the same budget for all (no early stop); --cpus-per-trial CPUs (and torch threads) each. An
+--eval-every steps, the same budget for all (a run stops at its first evaluation at >= 95% of subtasks, the
+spec's `evaluate.stop_at_subtasks`); --cpus-per-trial CPUs (and torch threads) each. An
 interrupted sweep continues with `fastrl sweep --resume ROOT/<time>-sweep`. The report reads every run under
 ROOT (sweep trials and the older ROOT/VARIANT/tracelines/* runs alike; the variant from each run's spec) and
 prints a table (mean and spread over seeds of the final evaluation, steps to 90% of the expert) and writes a
