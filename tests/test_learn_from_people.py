@@ -53,6 +53,26 @@ def test_off_grid_recordings_are_resampled_onto_the_control_grid():
     assert to_control_rate(traj, 20) is traj
 
 
+def test_resampling_carries_every_instrument_and_the_free_bodies():
+    spec = load_spec(spec_file("loose_bodies"), SHORT)
+    traj = expert_trajectories(FastEnv(spec), [0])[0]
+    assert traj.instruments is not None and traj.bodies is not None
+    fine_t = np.arange(0, traj.time[-1] + 1e-9, 1 / 60)  # a 60 Hz tracker: every third sample on the 20 Hz grid
+    every = [np.interp(fine_t, traj.time, c) for c in traj.portal.T]
+    tools = np.column_stack([np.interp(fine_t, traj.time, c) for c in traj.instruments.T])
+    flat = traj.bodies.reshape(len(traj.time), -1)
+    bodies = np.column_stack([np.interp(fine_t, traj.time, c) for c in flat.T]).reshape(len(fine_t), -1, 7)
+    back = to_control_rate(
+        Trajectory(fine_t, np.column_stack(every), {"seed": 0}, instruments=tools, bodies=bodies), 20
+    )
+    n = min(len(back.time), len(traj.time))
+    np.testing.assert_allclose(back.instruments[:n], traj.instruments[:n], atol=1e-9)
+    np.testing.assert_allclose(back.bodies[:n], traj.bodies[:n], atol=1e-9)
+    mid = to_control_rate(traj, 40)  # halfway between two samples: quaternions stay unit
+    np.testing.assert_allclose(np.linalg.norm(mid.bodies[..., 3:], axis=-1), 1.0, atol=1e-12)
+    np.testing.assert_allclose(mid.instruments[1], traj.instruments[:2].mean(0), atol=1e-12)
+
+
 def _demo_folder(tmp_path: Path, keep_actions: int) -> Path:
     """Three scripted-expert demonstrations; all but `keep_actions` of them lose their actions."""
     res = CliRunner().invoke(

@@ -151,6 +151,29 @@ def resample(time: np.ndarray, portal: np.ndarray, hz: float) -> tuple[np.ndarra
     return grid, out
 
 
+def resample_columns(grid: np.ndarray, time: np.ndarray, values: np.ndarray | None) -> np.ndarray | None:
+    """Every column of (T, ...) `values` linearly interpolated at `grid` (instruments' coordinates; None stays)."""
+    if values is None:
+        return None
+    flat = values.reshape(len(time), -1)
+    out = np.column_stack([np.interp(grid, time, flat[:, j]) for j in range(flat.shape[1])])
+    return out.reshape(len(grid), *values.shape[1:])
+
+
+def resample_bodies(grid: np.ndarray, time: np.ndarray, bodies: np.ndarray | None) -> np.ndarray | None:
+    """(T, k, 7) free bodies at `grid`: positions linearly, quaternions normalised after linear interpolation
+    along the short way (signs aligned sample to sample first); None stays None."""
+    if bodies is None:
+        return None
+    quat = bodies[..., 3:].copy()
+    flips = np.sign(np.einsum("tkq,tkq->tk", quat[1:], quat[:-1]))
+    flips[flips == 0] = 1.0
+    quat[1:] *= np.cumprod(flips, axis=0)[..., None]
+    out = resample_columns(grid, time, np.concatenate([bodies[..., :3], quat], axis=-1))
+    out[..., 3:] /= np.linalg.norm(out[..., 3:], axis=-1, keepdims=True)
+    return out
+
+
 def read_pose_csv(path: Path) -> tuple[np.ndarray, list[int]]:
     """Pose table (T, 9) in COLUMNS order and the file line of each row; PoseError names file and line."""
     path = Path(path)
