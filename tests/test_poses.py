@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 import fastrl
 from fastrl.cli import app
 from fastrl.data import Trajectory
+from fastrl.data.instrument_poses import instrument_columns
 from fastrl.data.poses import COLUMNS, PoseError, import_poses, portal_from_poses, poses_from_portal
 from fastrl.data.replay import expert_trajectories, replay
 from fastrl.model.portal import quat_to_mat, wrap
@@ -140,3 +141,36 @@ def test_cli_writes_a_loadable_trajectory_and_names_broken_files(tmp_path):
         res = CliRunner().invoke(app, ["import-poses", str(spec_file("tracelines")), str(tmp_path / name)])
         assert res.exit_code == 2 and name in res.output and why in res.output, res.output
         assert "Traceback" not in res.output
+
+
+@pytest.mark.parametrize("name", ["triangulation", "loose_bodies"])
+def test_tracked_instruments_import_beside_the_scope(tmp_path, name):
+    env, traj = expert(name)
+    task = env.unwrapped.task
+    cols = instrument_columns(task)
+    table = poses_from_portal(task, traj.time, traj.portal, traj.instruments)
+    shaft = mujoco.MjData(task.model)
+    for inst, start in zip(task.instruments, np.cumsum([0] + [len(i.qadr) for i in task.instruments])):
+        shaft.qpos[inst.qadr] = traj.instruments[-1, start : start + len(inst.qadr)]
+    mujoco.mj_kinematics(task.model, shaft)
+    first = task.instruments[0]
+    np.testing.assert_allclose(table[-1, 9:12], shaft.xpos[first.tip_body], atol=1e-12)  # the tracked shaft end
+    bad = table.copy()
+    bad[5, 9 + 3 : 9 + 7] = [2.0, 0.0, 0.0, 0.0]  # one sample's instrument quaternion is not a rotation
+    path = tmp_path / "session.csv"
+    np.savetxt(path, bad, delimiter=",", header=",".join([*COLUMNS, *cols]), comments="", fmt="%.17g")
+    got, report = import_poses(task, path, {"source": "human"})
+    assert any("quaternion" in line and "lines 7" in line for line in report), report
+    assert any(line.endswith("tracked") for line in report)
+    keep = np.delete(np.arange(len(traj.time)), 5)
+    ranges = np.concatenate([i.ranges for i in task.instruments])
+    inside = np.clip(traj.instruments[keep], ranges[:, 0], ranges[:, 1])  # a jaw a little past its soft limit
+    np.testing.assert_allclose(got.instruments, inside, atol=1e-9)
+    obs, _, _ = replay(env, got)  # replays with both hands where they were
+    assert len(obs) == len(keep)
+    np.savetxt(path, table[:, :-1], delimiter=",", header=",".join([*COLUMNS, *cols[:-1]]), comments="", fmt="%.17g")
+    with pytest.raises(PoseError, match=f"missing instrument columns \\['{cols[-1]}'\\]"):
+        import_poses(task, path, {})
+    scope_only = write_csv(tmp_path / "scope.csv", table[:, :9])
+    got, report = import_poses(task, scope_only, {})
+    assert got.instruments is None and any("not in the file" in line for line in report)

@@ -36,7 +36,7 @@ def import_poses_(
         bool, typer.Option(help="resample to the spec's control rate (replay takes one sample per control step)")
     ] = True,
 ) -> None:
-    """Convert tracked scope poses (CSV) into a trajectory through inverse portal kinematics."""
+    """Convert tracked scope (and instrument) poses (CSV) into a trajectory through inverse portal kinematics."""
     from ..data import TrajectoryError
     from ..data.poses import PoseError, import_poses
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -13,6 +14,7 @@ import numpy as np
 from ..model.portal import mat_to_quat, portal_from_shaft, quat_to_mat, shaft_pose, wrap
 from ..spec import spec_hash, task_hash
 from ..spec.limits import MAX_POSE_BYTES, MAX_POSE_ROWS, MAX_POSE_SECONDS, open_regular
+from .instrument_poses import instrument_columns, instrument_poses, instruments_from_poses
 from .trajectory import Trajectory, TrajectoryError
 
 COLUMNS = ("time", "x", "y", "z", "qw", "qx", "qy", "qz", "cable")  # s, m (x3), quaternion wxyz, rad
@@ -65,18 +67,22 @@ class PoseReport:
         return out
 
 
-def poses_from_portal(task, time: np.ndarray, portal: np.ndarray) -> np.ndarray:
-    """Pose table (T, 9) in COLUMNS order from portal coordinates (T, 5): what a tracker would report."""
+def poses_from_portal(task, time: np.ndarray, portal: np.ndarray, instruments: np.ndarray | None = None) -> np.ndarray:
+    """Pose table (T, 9) in COLUMNS order from portal coordinates (T, 5), then the other instruments' columns
+    (instrument_columns) if their coordinates are given: what a tracker would report."""
     tip, rot = shaft_pose(task.portal_point, task.portal_rot, portal)
-    return np.column_stack([time, tip, mat_to_quat(rot), wrap(np.asarray(portal, float)[:, 4])])
+    table = np.column_stack([time, tip, mat_to_quat(rot), wrap(np.asarray(portal, float)[:, 4])])
+    return table if instruments is None else np.column_stack([table, instrument_poses(task, instruments)])
 
 
 def portal_from_poses(
     task, poses: np.ndarray, tolerance_mm: float = 2.0, tolerance_deg: float = 5.0, max_rejected: float = 0.2
 ) -> tuple[np.ndarray, np.ndarray, PoseReport]:
-    """Times (K,), portal coordinates (K, 5) of the consistent rows of a pose table, and the report.
+    """Times (K,), portal coordinates (K, 5) of the consistent rows of a pose table, and the report. A table with the
+    task's instrument columns after COLUMNS also gives their coordinates: (times, portal, instruments, report).
 
-    Rejected rows are dropped; PoseError if fewer than 2 remain or more than max_rejected of them go.
+    Rejected rows (a check failing for the scope or any instrument) are dropped; PoseError if fewer than 2 remain
+    or more than max_rejected of them go.
     """
     with np.errstate(over="ignore", invalid="ignore"):  # rows of 1e300 overflow: rejected, not warned about
         return _portal_from_poses(task, poses, tolerance_mm, tolerance_deg, max_rejected)
@@ -85,8 +91,13 @@ def portal_from_poses(
 def _portal_from_poses(task, poses, tolerance_mm: float, tolerance_deg: float, max_rejected: float):
     """portal_from_poses, without its floating-point error state."""
     poses = np.asarray(poses, float)
-    if poses.ndim != 2 or poses.shape[1] != len(COLUMNS):
+    tools = len(instrument_columns(task)) if task.instruments else 0
+    if poses.ndim != 2 or poses.shape[1] not in {len(COLUMNS), len(COLUMNS) + tools}:
         raise ValueError(f"a pose table has shape (T, {len(COLUMNS)}) in the order {COLUMNS}, got {poses.shape}")
+    tracked = poses.shape[1] > len(COLUMNS)
+    if tracked:
+        instruments, tool_bad = instruments_from_poses(task, poses[:, len(COLUMNS) :], tolerance_mm, tolerance_deg)
+        poses = poses[:, : len(COLUMNS)]
     n = len(poses)
     bad: dict[str, np.ndarray] = {}
     finite = np.all(np.isfinite(poses), axis=1)
@@ -100,6 +111,9 @@ def _portal_from_poses(task, poses, tolerance_mm: float, tolerance_deg: float, m
     bad["axis_angle"] = usable & (angle > math.radians(tolerance_deg))
     lo, hi = task.ranges[:3, 0] - RANGE_SLACK, task.ranges[:3, 1] + RANGE_SLACK
     bad["out_of_range"] = usable & np.any((q4[:, :3] < lo) | (q4[:, :3] > hi), axis=1)
+    if tracked:
+        for reason, rows in tool_bad.items():
+            bad[reason] = bad[reason] | rows
     ok = ~np.any(list(bad.values()), axis=0)
     bad["time"] = np.zeros(n, bool)
     last = -np.inf
@@ -121,7 +135,7 @@ def _portal_from_poses(task, poses, tolerance_mm: float, tolerance_deg: float, m
         )
     portal = np.column_stack([q4[ok], wrap(poses[ok, 8])])
     portal[:, :3] = np.clip(portal[:, :3], task.ranges[:3, 0], task.ranges[:3, 1])
-    return poses[ok, 0], portal, report
+    return (poses[ok, 0], portal, instruments[ok], report) if tracked else (poses[ok, 0], portal, report)
 
 
 def duration_problem(time: np.ndarray, hz: float | None) -> str | None:
@@ -174,8 +188,9 @@ def resample_bodies(grid: np.ndarray, time: np.ndarray, bodies: np.ndarray | Non
     return out
 
 
-def read_pose_csv(path: Path) -> tuple[np.ndarray, list[int]]:
-    """Pose table (T, 9) in COLUMNS order and the file line of each row; PoseError names file and line."""
+def read_pose_csv(path: Path, optional: Sequence[str] = ()) -> tuple[np.ndarray, list[int]]:
+    """Pose table (T, 9) in COLUMNS order, then the `optional` columns (other instruments) if the header has them
+    all, and the file line of each row; PoseError names file and line (and columns of a partial optional set)."""
     path = Path(path)
     try:
         fh = open_regular(path, MAX_POSE_BYTES)  # never blocks on a FIFO; refuses folders and huge files
@@ -191,7 +206,12 @@ def read_pose_csv(path: Path) -> tuple[np.ndarray, list[int]]:
             missing = [c for c in COLUMNS if c not in names]
             if missing:
                 raise PoseError(f"{path}:1: missing columns {missing} (header has {names})")
-            cols = [names.index(c) for c in COLUMNS]
+            extra = [c for c in optional if c in names]
+            if extra and len(extra) < len(optional):
+                missing = [c for c in optional if c not in names]
+                raise PoseError(f"{path}:1: missing instrument columns {missing} (the file tracks {extra})")
+            wanted = (*COLUMNS, *extra)
+            cols = [names.index(c) for c in wanted]
             rows, lines = [], []
             for cells in reader:
                 if not cells or not any(c.strip() for c in cells):
@@ -200,7 +220,7 @@ def read_pose_csv(path: Path) -> tuple[np.ndarray, list[int]]:
                     raise PoseError(f"{path}:{reader.line_num}: {len(cells)} fields, the header has {len(names)}")
                 if len(rows) == MAX_POSE_ROWS:
                     raise PoseError(f"{path}:{reader.line_num}: more than {MAX_POSE_ROWS:,} samples")
-                rows.append([_number(cells[j], path, reader.line_num, COLUMNS[k]) for k, j in enumerate(cols)])
+                rows.append([_number(cells[j], path, reader.line_num, wanted[k]) for k, j in enumerate(cols)])
                 lines.append(reader.line_num)
     except (OSError, UnicodeDecodeError, csv.Error) as e:
         raise PoseError(f"{path}: cannot read ({e})") from None
@@ -231,18 +251,23 @@ def import_poses(
 ) -> tuple[Trajectory, list[str]]:
     """A Trajectory from a pose CSV, and the report lines; PoseError (with the report) if it cannot be made."""
     path = Path(path)
-    poses, lines = read_pose_csv(path)
+    poses, lines = read_pose_csv(path, instrument_columns(task) if task.instruments else ())
     try:
-        time, portal, report = portal_from_poses(task, poses, tolerance_mm, tolerance_deg, max_rejected)
+        time, portal, *instruments, report = portal_from_poses(task, poses, tolerance_mm, tolerance_deg, max_rejected)
     except PoseError as e:
         raise PoseError(f"{path}: {e}", e.report, e.report.lines(lines, "lines")) from None
+    instruments = instruments[0] if instruments else None
     text = report.lines(lines, "lines")
+    if task.instruments:
+        names = ", ".join(i.spec.name for i in task.instruments)
+        text.append(f"instruments {names}: " + ("tracked" if instruments is not None else "not in the file, at rest"))
     problem = duration_problem(time, resample_hz)
     if problem:
         raise PoseError(f"{path}: {problem}", report, text)
     if resample_hz:
-        raw = len(time)
+        raw, before = len(time), time
         time, portal = resample(time, portal, resample_hz)
+        instruments = resample_columns(time, before, instruments)
         text.append(f"resampled {raw} samples to {len(time)} at {resample_hz:g} Hz (one per control step)")
     meta = {
         "spec": task.spec.name,
@@ -257,6 +282,6 @@ def import_poses(
         **meta,
     }
     try:
-        return Trajectory(time - time[0], portal, meta), text
+        return Trajectory(time - time[0], portal, meta, instruments=instruments), text
     except TrajectoryError as e:
         raise PoseError(f"{path}: {e}", report, text) from None
