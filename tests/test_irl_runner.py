@@ -10,8 +10,9 @@ from rich.console import Console
 from safetensors import safe_open
 from typer.testing import CliRunner
 
+from fastrl.agents.bc import action_accuracy
 from fastrl.cli import app
-from fastrl.data.replay import replay
+from fastrl.data.replay import demonstration_pairs, replay
 from fastrl.data.trajectory import Trajectory
 from fastrl.env import FastEnv
 from fastrl.irl.export import load_networks
@@ -251,3 +252,34 @@ def test_gail_airl_learn_with_irl_generator_and_forward_rl_with_train(tmp_path, 
         assert (spec.train.ppo.n_steps, spec.irl.generator.ppo.n_steps) == (64, 32)  # the two really differ
     finally:
         learner.venv.close()
+
+
+def test_a_cloned_generator_starts_from_the_demonstrations_behaviour(tmp_path):
+    base = [*TINY, "irl.algorithm=airl", "irl.discriminator.ranking=0", "irl.demonstrations.expert=4"]
+    accuracy = {}
+    for cloned in (False, True):
+        spec = load_spec(spec_file("tracelines"), [*base, f"irl.generator.cloned={str(cloned).lower()}"])
+        assert spec.cloned_generator is cloned
+        (tmp_path / str(cloned)).mkdir()
+        learner = build_learner(spec, tmp_path / str(cloned), Console(file=io.StringIO()), progress=False)
+        try:
+            pairs = demonstration_pairs(FastEnv(spec), learner.demos)
+            if cloned:
+                learner.clone()
+                assert learner.venv.training is False  # the clone's normalisation stays through adversarial training
+                np.testing.assert_allclose(learner.venv.obs_rms.mean, pairs[0].mean(axis=0), rtol=1e-5, atol=1e-6)
+            accuracy[cloned] = action_accuracy(learner.model, learner.venv, *pairs)
+        finally:
+            learner.venv.close()
+    assert accuracy[True] > accuracy[False] + 0.25  # 11 discrete actions: an untrained policy matches by chance
+
+
+def test_irl_with_a_cloned_generator_says_so_and_keeps_it_in_meta(tmp_path):
+    res = invoke(
+        ["irl", str(spec_file("tracelines")), "--algorithm", "airl", "--timesteps", "256"]
+        + sets(["irl.discriminator.ranking=0", "irl.generator.cloned=true"]),
+        tmp_path,
+    )
+    assert res.exit_code == 0, res.output
+    assert "generator: cloned from 2 demonstrations, action accuracy" in res.output
+    assert json.loads((only_run(tmp_path) / "meta.json").read_text())["generator"]["cloned"] is True

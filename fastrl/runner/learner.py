@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from math import nan
 from pathlib import Path
 
 from rich.console import Console
 from rich.markup import escape
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
-from stable_baselines3.common.vec_env import VecEnv
+from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 
-from ..agents.bc import behaviour_clone
+from ..agents.bc import action_accuracy, behaviour_clone
 from ..agents.sb3 import build_model, make_vec_env
 from ..data.recordings import load_recordings, with_actions
 from ..data.replay import demonstration_pairs
@@ -39,6 +40,7 @@ class Learner:
     disc: Discriminator | None = None
     demos: list[Trajectory] = field(default_factory=list)
     averaging: RewardAveraging | None = None
+    console: Console | None = None
 
     @property
     def parts(self) -> dict:
@@ -56,23 +58,26 @@ class Learner:
         return dict(self.callbacks[0].stats) if self.callbacks else {}
 
     def learn(self, timesteps: int, monitor: BaseCallback) -> None:
-        """Train for `timesteps` more steps (behavioural cloning: fit the demonstrations once)."""
-        if self.spec.irl.algorithm == "bc":
-            if self.model.num_timesteps == 0:
-                bc = self.spec.irl.bc
-                obs, actions = demonstration_pairs(FastEnv(self.spec), self.demos)
-                behaviour_clone(
-                    self.model,
-                    self.venv,
-                    obs,
-                    actions,
-                    bc.epochs,
-                    bc.batch_size,
-                    bc.learning_rate,
-                    self.spec.train.seed,
+        """Train for `timesteps` more steps (behavioural cloning: fit the demonstrations once; a cloned generator
+        is fitted to them before its first step)."""
+        if self.model.num_timesteps == 0 and (self.spec.irl.algorithm == "bc" or self.spec.cloned_generator):
+            accuracy = self.clone()
+            if self.spec.cloned_generator and self.console is not None:
+                self.console.print(
+                    f"generator: cloned from {len(self.demos)} demonstrations, action accuracy {accuracy:.2f}"
                 )
+        if self.spec.irl.algorithm == "bc":
             return
         self.model.learn(timesteps, callback=[*self.callbacks, monitor], reset_num_timesteps=False)
+
+    def clone(self) -> float:
+        """Fit the policy to the demonstrated actions (irl.bc's settings); return its action accuracy on them."""
+        bc = self.spec.irl.bc
+        obs, actions = demonstration_pairs(FastEnv(self.spec), self.demos)
+        behaviour_clone(
+            self.model, self.venv, obs, actions, bc.epochs, bc.batch_size, bc.learning_rate, self.spec.train.seed
+        )
+        return action_accuracy(self.model, self.venv, obs, actions) if self.model.action_space.shape == () else nan
 
 
 def demonstrations(spec: TaskSpec, run: Path, console: Console, progress: bool) -> list[Trajectory]:
@@ -100,14 +105,18 @@ def demonstrations(spec: TaskSpec, run: Path, console: Console, progress: bool) 
 def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
     """Print the PPO generator's envs and hyperparameters, and where they come from; keep them in meta.json."""
     train = spec.learning()
-    source = "irl.generator" if spec.irl.generator is not None else "train"
+    gen = spec.irl.generator
+    source = "irl.generator" if gen is not None and (gen.n_envs, gen.ppo) != (None, None) else "train"
     ppo = train.ppo.model_dump()
     console.print(
         f"generator: PPO on {train.n_envs} envs ({source}): " + ", ".join(f"{k} {v}" for k, v in ppo.items()),
         markup=False,
         highlight=False,
     )
-    update_meta(run, generator={"source": source, "n_envs": train.n_envs, "ppo": ppo})
+    cloned = spec.cloned_generator
+    if cloned:
+        console.print("generator: starts from the demonstrations' behavioural clone (irl.generator.cloned)")
+    update_meta(run, generator={"source": source, "n_envs": train.n_envs, "ppo": ppo, "cloned": cloned})
 
 
 def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = True) -> Learner:
@@ -125,6 +134,8 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
         log_generator(spec, run, console)
     model = build_model(spec, venv, replay_buffer_class=RelabelingReplayBuffer if off_policy else None)
     demos = demonstrations(spec, run, console, progress)
+    if spec.cloned_generator and isinstance(venv, VecNormalize):
+        venv.training = False  # the clone's normalisation (set when it is fitted, or restored on resume) stays
     d = irl.discriminator
     obs_dim = venv.observation_space.shape[0]
     disc = Discriminator(
@@ -174,4 +185,4 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
             ranking_weight=d.ranking,
         )
     averaging = RewardAveraging(disc, d.average_every) if d.average_every and disc.shaped else None
-    return Learner(spec, venv, model, [cb, *([averaging] if averaging else [])], disc, demos, averaging)
+    return Learner(spec, venv, model, [cb, *([averaging] if averaging else [])], disc, demos, averaging, console)

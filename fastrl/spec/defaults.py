@@ -60,8 +60,11 @@ def canonical_dump(spec) -> dict:
     data = drop_unused_extensions(spec.model_dump(mode="json"))
     if data["train"]["sac"]["periodic_every"] is None:  # added later: specs without it keep their hash
         del data["train"]["sac"]["periodic_every"]
-    if data["irl"]["generator"] is None:  # specs without the generator's own settings keep their former hash
+    generator = data["irl"]["generator"]
+    if generator is None:  # specs without the generator's own settings keep their former hash
         del data["irl"]["generator"]
+    elif not generator["cloned"]:  # added later: generators that start from scratch keep their hash
+        del generator["cloned"]
     for path, value in algorithm_defaults(spec).items():
         node = data
         for name in path[:-1]:

@@ -124,6 +124,12 @@ class Generator(Strict):
         description="the generator's PPO hyperparameters; null: train.ppo. Forward RL's are tuned for speed on the "
         "heuristic reward, and an adversarial reward that moves with every rollout needs gentler steps",
     )
+    cloned: bool = Field(
+        False,
+        description="start from the behavioural clone of the demonstrations (irl.bc's settings) with the "
+        "observation normalisation fixed to theirs, so the discriminator meets a generator near the task from the "
+        "first rollout",
+    )
 
 
 class BehaviourCloning(Strict):
@@ -147,6 +153,12 @@ class IRL(Strict):
     def enabled(self) -> bool:
         """Whether runs learn from demonstrations."""
         return self.algorithm != "none"
+
+
+def starts_cloned(train: Train, irl: IRL) -> bool:
+    """Whether the run's PPO generator starts from the demonstrations' behavioural clone (`irl.generator.cloned`)."""
+    gen = irl.generator
+    return gen is not None and gen.cloned and irl.algorithm in ("gail", "airl") and train.algo == "PPO"
 
 
 def learning_train(train: Train, irl: IRL) -> Train:

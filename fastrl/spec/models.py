@@ -15,7 +15,7 @@ from .base import NonNeg, Pos, Strict, _fail, _raise
 from .defaults import resolve_defaults
 from .experiment import Experiment
 from .instruments import Instrument, instrument_errors
-from .irl import IRL, learning_train
+from .irl import IRL, learning_train, starts_cloned
 from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_SECONDS, MAX_SUBTASKS
 from .loose import Cup, LooseBody, loose_errors
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
@@ -321,6 +321,11 @@ class TaskSpec(Strict):
     def learning(self) -> Train:
         """The train settings this run learns with (GAIL and AIRL on PPO: irl.generator's envs and PPO)."""
         return learning_train(self.train, self.irl)
+
+    @property
+    def cloned_generator(self) -> bool:
+        """Whether GAIL/AIRL's PPO generator starts from the demonstrations' behavioural clone."""
+        return starts_cloned(self.train, self.irl)
 
     def _discriminator_ignores(self) -> list[str]:
         """The terms the discriminator leaves out."""
