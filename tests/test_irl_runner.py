@@ -274,12 +274,21 @@ def test_a_cloned_generator_starts_from_the_demonstrations_behaviour(tmp_path):
     assert accuracy[True] > accuracy[False] + 0.25  # 11 discrete actions: an untrained policy matches by chance
 
 
-def test_irl_with_a_cloned_generator_says_so_and_keeps_it_in_meta(tmp_path):
-    res = invoke(
-        ["irl", str(spec_file("tracelines")), "--algorithm", "airl", "--timesteps", "256"]
-        + sets(["irl.discriminator.ranking=0", "irl.generator.cloned=true"]),
-        tmp_path,
-    )
+def test_irl_with_a_cloned_generator_says_so_keeps_it_in_meta_and_resumes_as_it_ran(tmp_path):
+    cloned = ["irl.discriminator.ranking=0", "irl.generator.cloned=true"]
+    args = ["irl", str(spec_file("tracelines")), "--algorithm", "airl"]
+    res = invoke([*args, "--timesteps", "512", *sets(cloned)], tmp_path / "whole")
     assert res.exit_code == 0, res.output
     assert "generator: cloned from 2 demonstrations, action accuracy" in res.output
-    assert json.loads((only_run(tmp_path) / "meta.json").read_text())["generator"]["cloned"] is True
+    whole = only_run(tmp_path / "whole")
+    assert json.loads((whole / "meta.json").read_text())["generator"]["cloned"] is True
+    res = invoke([*args, "--timesteps", "256", *sets(cloned)], tmp_path / "resumed")
+    assert res.exit_code == 0, res.output
+    resumed = only_run(tmp_path / "resumed")
+    res = CliRunner().invoke(app, ["run", "--resume", str(resumed), "--timesteps", "512", "--no-progress"])
+    assert res.exit_code == 0 and "cloned from" not in res.output, res.output  # cloned once, at step 0
+    stats = [np.load(r / "final" / "normalize.npz") for r in (whole, resumed)]  # the clone's, never updated:
+    for key in ("obs_mean", "obs_var", "obs_count"):  # the resumed run keeps them fixed too
+        np.testing.assert_array_equal(stats[0][key], stats[1][key])
+    pairs = sum(len(Trajectory.load(f).time) - 1 for f in (whole / "demos").glob("*.npz"))
+    assert float(stats[0]["obs_count"]) == pairs
