@@ -6,8 +6,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 from rich.console import Console
 from safetensors import safe_open
+from stable_baselines3.common.callbacks import BaseCallback
 from typer.testing import CliRunner
 
 from fastrl.agents.bc import action_accuracy
@@ -292,3 +294,29 @@ def test_irl_with_a_cloned_generator_says_so_keeps_it_in_meta_and_resumes_as_it_
         np.testing.assert_array_equal(stats[0][key], stats[1][key])
     pairs = sum(len(Trajectory.load(f).time) - 1 for f in (whole / "demos").glob("*.npz"))
     assert float(stats[0]["obs_count"]) == pairs
+
+
+class _Quiet(BaseCallback):
+    """A monitor that records nothing."""
+
+    def _on_step(self) -> bool:
+        return True
+
+
+def test_an_anchored_generator_stays_nearer_the_demonstrations(tmp_path):
+    extra = ["irl.algorithm=airl", "irl.discriminator.ranking=0", "irl.generator.cloned=true"]
+    likelihood = {}
+    for anchor in (0, 64):
+        spec = load_spec(spec_file("tracelines"), [*TINY, *extra, f"irl.generator.anchor={anchor}"])
+        (tmp_path / str(anchor)).mkdir()
+        learner = build_learner(spec, tmp_path / str(anchor), Console(file=io.StringIO()), progress=False)
+        try:
+            learner.learn(256, _Quiet())  # the clone, four PPO updates, the anchor's steps between them
+            obs, actions = demonstration_pairs(FastEnv(spec), learner.demos)
+            x = torch.as_tensor(learner.venv.normalize_obs(obs), dtype=torch.float32)
+            with torch.no_grad():
+                _, log_prob, _ = learner.model.policy.evaluate_actions(x, torch.as_tensor(actions))
+            likelihood[anchor] = float(log_prob.mean())  # of the demonstrated actions under the generator's policy
+        finally:
+            learner.venv.close()
+    assert likelihood[64] > likelihood[0] + 0.2, likelihood

@@ -12,6 +12,7 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 
+from ..agents.anchor import CloneAnchor
 from ..agents.bc import action_accuracy, behaviour_clone
 from ..agents.sb3 import build_model, make_vec_env
 from ..data.recordings import load_recordings, with_actions
@@ -114,9 +115,12 @@ def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
         highlight=False,
     )
     cloned = spec.cloned_generator
+    anchor = gen.anchor if cloned else 0
     if cloned:
-        console.print("generator: starts from the demonstrations' behavioural clone (irl.generator.cloned)")
-    update_meta(run, generator={"source": source, "n_envs": train.n_envs, "ppo": ppo, "cloned": cloned})
+        held = f", held near them by {anchor} cloning steps after each update (irl.generator.anchor)" if anchor else ""
+        console.print(f"generator: starts from the demonstrations' behavioural clone (irl.generator.cloned){held}")
+    meta = {"source": source, "n_envs": train.n_envs, "ppo": ppo, "cloned": cloned, "anchor": anchor}
+    update_meta(run, generator=meta)
 
 
 def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = True) -> Learner:
@@ -185,4 +189,8 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
             ranking_weight=d.ranking,
         )
     averaging = RewardAveraging(disc, d.average_every) if d.average_every and disc.shaped else None
-    return Learner(spec, venv, model, [cb, *([averaging] if averaging else [])], disc, demos, averaging, console)
+    callbacks = [cb, *([averaging] if averaging else [])]
+    if spec.cloned_generator and irl.generator.anchor:
+        obs, actions = demonstration_pairs(env, demos)
+        callbacks.append(CloneAnchor(obs, actions, steps=irl.generator.anchor, seed=spec.train.seed))
+    return Learner(spec, venv, model, callbacks, disc, demos, averaging, console)

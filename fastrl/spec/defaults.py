@@ -63,8 +63,10 @@ def canonical_dump(spec) -> dict:
     generator = data["irl"]["generator"]
     if generator is None:  # specs without the generator's own settings keep their former hash
         del data["irl"]["generator"]
-    elif not generator["cloned"]:  # added later: generators that start from scratch keep their hash
-        del generator["cloned"]
+    else:  # added later: generators that start from scratch, or are not anchored, keep their hash
+        for key in ("cloned", "anchor"):
+            if not generator[key]:
+                del generator[key]
     for path, value in algorithm_defaults(spec).items():
         node = data
         for name in path[:-1]:

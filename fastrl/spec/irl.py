@@ -130,6 +130,12 @@ class Generator(Strict):
         "observation normalisation fixed to theirs, so the discriminator meets a generator near the task from the "
         "first rollout",
     )
+    anchor: int = Field(
+        0,
+        ge=0,
+        description="with `cloned`: minibatches of behavioural cloning on the demonstrations after every PPO update "
+        "(as DAPG), so the adversarial reward cannot lead the clone away from the task; 0: none",
+    )
 
 
 class BehaviourCloning(Strict):
