@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from math import nan
+from math import isnan, nan
 from pathlib import Path
 
 from rich.console import Console
@@ -64,9 +64,8 @@ class Learner:
         if self.model.num_timesteps == 0 and (self.spec.irl.algorithm == "bc" or self.spec.cloned_generator):
             accuracy = self.clone()
             if self.spec.cloned_generator and self.console is not None:
-                self.console.print(
-                    f"generator: cloned from {len(self.demos)} demonstrations, action accuracy {accuracy:.2f}"
-                )
+                matched = "" if isnan(accuracy) else f", action accuracy {accuracy:.2f}"
+                self.console.print(f"generator: cloned from {len(self.demos)} demonstrations{matched}")
         if self.spec.irl.algorithm == "bc":
             return
         self.model.learn(timesteps, callback=[*self.callbacks, monitor], reset_num_timesteps=False)
