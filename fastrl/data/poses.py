@@ -160,7 +160,7 @@ def resample(time: np.ndarray, portal: np.ndarray, hz: float) -> tuple[np.ndarra
     grid = time[0] + np.arange(int(math.floor((time[-1] - time[0]) * hz + 1e-9)) + 1) / hz
     q = portal.copy()
     q[:, 3:] = np.unwrap(q[:, 3:], axis=0)
-    out = np.column_stack([np.interp(grid, time, q[:, j]) for j in range(5)])
+    out = resample_columns(grid, time, q)
     out[:, 3:] = wrap(out[:, 3:])
     return grid, out
 

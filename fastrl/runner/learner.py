@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from math import isnan, nan
 from pathlib import Path
 
@@ -70,10 +71,15 @@ class Learner:
             return
         self.model.learn(timesteps, callback=[*self.callbacks, monitor], reset_num_timesteps=False)
 
+    @cached_property
+    def pairs(self) -> tuple:
+        """The demonstrations' (observations, actions), replayed once for the clone and the anchor."""
+        return demonstration_pairs(FastEnv(self.spec), self.demos)
+
     def clone(self) -> float:
         """Fit the policy to the demonstrated actions (irl.bc's settings); return its action accuracy on them."""
         bc = self.spec.irl.bc
-        obs, actions = demonstration_pairs(FastEnv(self.spec), self.demos)
+        obs, actions = self.pairs
         behaviour_clone(
             self.model, self.venv, obs, actions, bc.epochs, bc.batch_size, bc.learning_rate, self.spec.train.seed
         )
@@ -188,8 +194,7 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
             ranking_weight=d.ranking,
         )
     averaging = RewardAveraging(disc, d.average_every) if d.average_every and disc.shaped else None
-    callbacks = [cb, *([averaging] if averaging else [])]
+    learner = Learner(spec, venv, model, [cb, *([averaging] if averaging else [])], disc, demos, averaging, console)
     if spec.cloned_generator and irl.generator.anchor:
-        obs, actions = demonstration_pairs(env, demos)
-        callbacks.append(CloneAnchor(obs, actions, steps=irl.generator.anchor, seed=spec.train.seed))
-    return Learner(spec, venv, model, callbacks, disc, demos, averaging, console)
+        learner.callbacks.append(CloneAnchor(*learner.pairs, steps=irl.generator.anchor, seed=spec.train.seed))
+    return learner
