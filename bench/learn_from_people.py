@@ -13,7 +13,8 @@ from the states) and once with the true actions kept. Prints Kendall tau-b and S
 return, the learned reward r_psi and the learned value V against the skill labels over the 50 trajectories, the
 learned policy's subtask completion (eval.json, 20 seeds), and the recovered-action agreement on the 10 chosen
 (exact-match rate). Liver tour: 100 procedures (5 x 20), the best 10 without actions, Spearman of learned reward and
-value against economy and safety. Writes docs/learn_from_people.json.
+value against economy and safety, on the whole --liver-timesteps budget (no early stop: stopped at its first tour,
+100k-250k steps, the critic is too young to rank). Writes docs/learn_from_people.json.
 """
 
 from __future__ import annotations
@@ -49,14 +50,14 @@ def cohort(task: str, levels: int, per_level: int) -> tuple[Path, Path]:
     return full, bare
 
 
-def overrides(timesteps: int, seed: int) -> list[str]:
-    """The spec changes of one protocol run."""
+def overrides(timesteps: int, seed: int, stop: bool = True) -> list[str]:
+    """The spec changes of one protocol run; `stop`: end at the first evaluation that completes every subtask."""
     return [
         f"train.timesteps={timesteps}",
         f"train.seed={seed}",
         "evaluate.periodic_every=50000",
         "evaluate.periodic_episodes=10",
-        "evaluate.stop_at_subtasks=1.0",
+        *(["evaluate.stop_at_subtasks=1.0"] if stop else []),
         "evaluate.image_every=8",
         "evaluate.record_episodes=2",
         "train.checkpoint_every=50000",
@@ -128,7 +129,10 @@ def protocol(task: str, inputs: Path, keep: bool, args) -> dict:
         args.top,
         "heuristic",
         "airl",
-        overrides(args.timesteps if task != "liver_tour" else args.liver_timesteps, args.seed),
+        # the liver runs its budget: stopped at its first tour (100k-250k steps) the critic is too young to rank
+        overrides(args.liver_timesteps, args.seed, stop=False)
+        if task == "liver_tour"
+        else overrides(args.timesteps, args.seed),
         ROOT / ("with-actions" if keep else "without-actions"),
         console=Console(stderr=True),
         progress=False,

@@ -59,14 +59,21 @@ def test_the_scene_compiles_with_the_anatomy_where_the_spec_says():
     assert math.degrees(math.asin(point[2] / spec.scene.radius)) == pytest.approx(72)
 
 
-def test_the_gym_id_gives_the_camera_position_state():
+def test_the_gym_id_gives_the_camera_position_state_and_the_cue():
     env = gymnasium.make("fastrl/LiverTour-v0")
     obs, _ = env.reset(seed=0)
     u = env.unwrapped
-    assert obs.shape == (3,)
-    assert np.allclose(obs, u.data.cam_xpos[u.task.camera], atol=1e-6)
+    # the camera position, then the cue (target direction, distance, dwell), portal coordinates, progress, clock
+    assert obs.shape == (3 + 3 + 1 + 1 + 5 + 1 + 1,)
+    assert np.allclose(obs[:3], u.data.cam_xpos[u.task.camera], atol=1e-6)
     obs, *_ = env.step(5)  # insert
-    assert np.allclose(obs, u.data.cam_xpos[u.task.camera], atol=1e-6)
+    assert np.allclose(obs[:3], u.data.cam_xpos[u.task.camera], atol=1e-6)
+
+
+def test_the_liver_reward_sees_the_camera_position_alone():
+    spec = load_spec(LIVER, ["irl.algorithm=airl"])
+    seen = [t for t in spec.observation.terms() if t not in spec.irl.discriminator.ignore]
+    assert seen == ["camera_position"]
 
 
 def test_the_laparoscope_pivots_about_the_trocar():

@@ -59,8 +59,10 @@ def test_without_a_discriminator_its_defaults_wait_for_the_algorithm(tmp_path):
 
 
 def test_gail_ignores_the_clock_only_where_it_is_observed():
-    spec = load_spec(spec_file("liver_tour"), ["irl.algorithm=gail"])
-    assert ("elapsed" in spec.observation.terms()) == (spec.irl.discriminator.ignore == ["elapsed"])
+    unset = ["irl.algorithm=gail", "irl.discriminator.ignore=null"]
+    without = load_spec(spec_file("liver_tour"), [*unset, "observation.extra=[]"])
+    with_clock = load_spec(spec_file("liver_tour"), [*unset, "observation.extra=[elapsed]"])
+    assert without.irl.discriminator.ignore == [] and with_clock.irl.discriminator.ignore == ["elapsed"]
 
 
 def test_an_old_spec_yaml_with_a_removed_option_at_its_one_value_still_loads(tmp_path):
