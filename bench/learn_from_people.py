@@ -174,7 +174,7 @@ def show(results: dict) -> None:
     print("|---|---|---|---|---|---|")
     for task, by in results["tasks"].items():
         for variant, r in by.items():
-            if variant == "recovery":
+            if "ranking" not in r:  # recovery and the per-seed extras
                 continue
             cells = [
                 f"{r['ranking'][k]['kendall_tau_b']:.2f} / {r['ranking'][k]['spearman']:.2f}"
