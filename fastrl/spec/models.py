@@ -177,7 +177,9 @@ class Observation(Strict):
     """The paper's state, with options; `extra` adds registered terms by name."""
 
     state: Literal["full", "camera_position"] = Field(
-        "full", description="camera_position: the state is the camera position in R^3 only (the liver tour)"
+        "full",
+        description="camera_position: the paper's liver-tour state, the camera position in R^3, then the `extra` terms "
+        "(the liver spec adds the cue for its policy and keeps them from the reward with irl.discriminator.ignore)",
     )
     velocities: bool = True
     goal: bool = True
