@@ -297,3 +297,32 @@ def test_stepping_after_a_replayed_pose_matches_stepping_after_placing_it():
         oa, *_ = a.step(action)
         ob, *_ = b.step(action)
         assert np.allclose(oa, ob, atol=1e-6)
+
+
+def test_late_starts_run_the_clock_on_unseeded_resets_only():
+    """A generator env's episodes after its first start late, on the clock the policy observes; seeded resets
+    (evaluations) and replays (options) always start at 0 s, and a late episode ends at the time limit."""
+    from fastrl.env import FastEnv
+    from fastrl.spec import load_spec
+    from fastrl.terms.observations import elapsed
+
+    env = FastEnv(load_spec(spec_file("tracelines")), late_starts=0.75)
+    env.reset(seed=3)
+    assert env.steps == 0 and elapsed(env.state) == (0.0,)
+    starts = []
+    for _ in range(30):
+        env.reset()
+        starts.append(env.steps)
+        assert elapsed(env.state)[0] == pytest.approx(env.steps / env.max_steps)
+    assert 0 < max(starts) <= 0.75 * env.max_steps and len(set(starts)) > 10
+    env.reset(options={"portal": env.portal_coordinates()})
+    assert env.steps == 0
+    env.reset(seed=4)
+    env.reset()
+    while env.steps < 5:  # a late start that leaves a few steps: redraw until one does not start at 0
+        env.reset()
+    left, steps, terminated, truncated = env.max_steps - env.steps, 0, False, False
+    while not (terminated or truncated):
+        *_, terminated, truncated, _ = env.step(0)
+        steps += 1
+    assert truncated and steps == left

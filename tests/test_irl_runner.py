@@ -296,6 +296,19 @@ def test_irl_with_a_cloned_generator_says_so_keeps_it_in_meta_and_resumes_as_it_
     assert float(stats[0]["obs_count"]) == pairs
 
 
+def test_late_starts_reach_the_generator_alone_and_are_kept_in_meta(tmp_path):
+    late = ["irl.discriminator.ranking=0", "irl.generator.late_starts=0.5"]
+    spec = load_spec(spec_file("tracelines"), [*TINY, "irl.algorithm=airl", *late])
+    assert spec.generator_late_starts == 0.5
+    assert load_spec(spec_file("tracelines"), [*TINY, *late]).generator_late_starts == 0.0  # forward RL
+    res = invoke(
+        ["irl", str(spec_file("tracelines")), "--algorithm", "gail", "--timesteps", "256", *sets(late)], tmp_path
+    )
+    assert res.exit_code == 0, res.output
+    assert "up to 50% of the time limit late (irl.generator.late_starts)" in res.output
+    assert json.loads((only_run(tmp_path) / "meta.json").read_text())["generator"]["late_starts"] == 0.5
+
+
 class _Quiet(BaseCallback):
     """A monitor that records nothing."""
 

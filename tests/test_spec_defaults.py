@@ -5,6 +5,7 @@ import yaml
 
 from fastrl.runner.rundir import write_spec
 from fastrl.spec import SpecError, TaskSpec, load_spec, spec_hash
+from fastrl.spec.defaults import canonical_dump
 
 from .conftest import spec_file
 
@@ -76,3 +77,12 @@ def test_an_old_spec_yaml_with_a_removed_option_at_its_one_value_still_loads(tmp
     (tmp_path / "spec.yaml").write_text(yaml.safe_dump(old))
     with pytest.raises(SpecError, match="entropy"):
         load_spec(tmp_path / "spec.yaml")
+
+
+def test_generator_options_added_later_keep_the_hash_of_specs_without_them():
+    """Hashed as before the options existed (no key at all) while they hold their off value."""
+    spec = load_spec(spec_file("periscoping"))  # its generator: cloned, not anchored, on time
+    generator = canonical_dump(spec)["irl"]["generator"]
+    assert generator["cloned"] is True and "anchor" not in generator and "late_starts" not in generator
+    late = load_spec(spec_file("periscoping"), ["irl.generator.late_starts=0.5"])
+    assert canonical_dump(late)["irl"]["generator"]["late_starts"] == 0.5 and spec_hash(late) != spec_hash(spec)

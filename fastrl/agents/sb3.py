@@ -24,8 +24,9 @@ ALGOS = {"PPO": PPO, "SAC": SAC}
 ACTIVATIONS = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}
 
 
-def make_vec_env(spec: TaskSpec, n_envs: int, seed: int, workers: int = 1) -> VecEnv:
-    """Vectorised FastEnvs, stepped in batches by `workers` processes (this one included), optionally normalised.
+def make_vec_env(spec: TaskSpec, n_envs: int, seed: int, workers: int = 1, late_starts: float = 0.0) -> VecEnv:
+    """Vectorised FastEnvs, stepped in batches by `workers` processes (this one included), optionally normalised;
+    `late_starts`: each env's episodes after its first start up to that share of the time limit late.
 
     Cheap envs step fastest in batches: one process per env (SB3's SubprocVecEnv) costs more in messages than
     it gains. The split never changes the trajectories. Learning from demonstrations, env rewards are replaced
@@ -33,9 +34,9 @@ def make_vec_env(spec: TaskSpec, n_envs: int, seed: int, workers: int = 1) -> Ve
     """
     processes = min(workers, n_envs, os.cpu_count() or 1)
     if processes > 1:
-        venv = SplitVecEnv(make_env=lambda: FastEnv(spec), n_envs=n_envs, processes=processes)
+        venv = SplitVecEnv(make_env=lambda: FastEnv(spec, late_starts=late_starts), n_envs=n_envs, processes=processes)
     else:
-        venv = FreshInfoVecEnv([lambda: FastEnv(spec) for _ in range(n_envs)])
+        venv = FreshInfoVecEnv([lambda: FastEnv(spec, late_starts=late_starts) for _ in range(n_envs)])
     venv.seed(seed)
     train = spec.learning()
     norm = train.normalize

@@ -29,8 +29,17 @@ class FastEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
 
-    def __init__(self, spec: TaskSpec, render_mode: str | None = None, width: int = 128, height: int = 128):
+    def __init__(
+        self,
+        spec: TaskSpec,
+        render_mode: str | None = None,
+        width: int = 128,
+        height: int = 128,
+        *,
+        late_starts: float = 0.0,
+    ):
         self.task_spec = spec
+        self.late_starts = late_starts  # unseeded resets (a vector env's next episodes) start up to this share late
         self.task: CompiledTask = compile_task(spec)
         self.model, self.data = self.task.model, mujoco.MjData(self.task.model)
         self.render_mode, self.width, self.height = render_mode, width, height
@@ -100,6 +109,9 @@ class FastEnv(gym.Env):
         self.actions.reset(self.data, self.task.qadr)
         s = self.state
         s.time, s.dwell, s.prev_dwell, s.dwell_best, s.potential = 0.0, 0.0, 0.0, 0.0, 0.0
+        if self.late_starts and seed is None and not options:
+            self.steps = int(self.np_random.integers(0, int(self.late_starts * self.max_steps) + 1))
+            s.time = self.steps * self.dt
         self._select(0)
         self._read(first=True)
         s.green = cue_green(s)

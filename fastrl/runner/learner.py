@@ -124,14 +124,21 @@ def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
     if cloned:
         held = f", held near them by {anchor} cloning steps after each update (irl.generator.anchor)" if anchor else ""
         console.print(f"generator: starts from the demonstrations' behavioural clone (irl.generator.cloned){held}")
+    late = spec.generator_late_starts
+    if late:
+        console.print(
+            f"generator: episodes after the first start up to {late:.0%} of the time limit late "
+            "(irl.generator.late_starts)"
+        )
     meta = {"source": source, "n_envs": train.n_envs, "ppo": ppo, "cloned": cloned, "anchor": anchor}
+    meta["late_starts"] = late
     update_meta(run, generator=meta)
 
 
 def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = True) -> Learner:
     """The model (and, learning from demonstrations, the discriminator and its callback) for a run."""
     train = spec.learning()
-    venv = make_vec_env(spec, train.n_envs, train.seed, train.workers)
+    venv = make_vec_env(spec, train.n_envs, train.seed, train.workers, spec.generator_late_starts)
     irl = spec.irl
     if irl.algorithm in ("none", "bc"):
         learner = Learner(spec, venv, build_model(spec, venv))

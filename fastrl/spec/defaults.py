@@ -63,8 +63,8 @@ def canonical_dump(spec) -> dict:
     generator = data["irl"]["generator"]
     if generator is None:  # specs without the generator's own settings keep their former hash
         del data["irl"]["generator"]
-    else:  # added later: generators that start from scratch, or are not anchored, keep their hash
-        for key in ("cloned", "anchor"):
+    else:  # added later: generators that start from scratch, unanchored, on time, keep their hash
+        for key in ("cloned", "anchor", "late_starts"):
             if not generator[key]:
                 del generator[key]
     for path, value in algorithm_defaults(spec).items():

@@ -136,6 +136,14 @@ class Generator(Strict):
         description="with `cloned`: minibatches of behavioural cloning on the demonstrations after every PPO update "
         "(as DAPG), so the adversarial reward cannot lead the clone away from the task; 0: none",
     )
+    late_starts: float = Field(
+        0.0,
+        ge=0,
+        lt=1,
+        description="every training episode after an env's first starts with a random share of the time limit, up "
+        "to this, already gone (the pose as usual), so the critic, whose value scores trainees, also meets the late "
+        "clock that slow trainees reach; 0: every episode at 0 s",
+    )
 
 
 class BehaviourCloning(Strict):
@@ -165,6 +173,12 @@ def starts_cloned(train: Train, irl: IRL) -> bool:
     """Whether the run's PPO generator starts from the demonstrations' behavioural clone (`irl.generator.cloned`)."""
     gen = irl.generator
     return gen is not None and gen.cloned and irl.algorithm in ("gail", "airl") and train.algo == "PPO"
+
+
+def late_starts(train: Train, irl: IRL) -> float:
+    """Up to what share of the time limit the PPO generator's training episodes start late (`irl.generator`)."""
+    gen = irl.generator
+    return gen.late_starts if gen is not None and irl.algorithm in ("gail", "airl") and train.algo == "PPO" else 0.0
 
 
 def learning_train(train: Train, irl: IRL) -> Train:

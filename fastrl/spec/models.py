@@ -15,7 +15,7 @@ from .base import NonNeg, Pos, Strict, _fail, _raise
 from .defaults import resolve_defaults
 from .experiment import Experiment
 from .instruments import Instrument, instrument_errors
-from .irl import IRL, learning_train, starts_cloned
+from .irl import IRL, late_starts, learning_train, starts_cloned
 from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_SECONDS, MAX_SUBTASKS
 from .loose import Cup, LooseBody, loose_errors
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
@@ -328,6 +328,11 @@ class TaskSpec(Strict):
     def cloned_generator(self) -> bool:
         """Whether GAIL/AIRL's PPO generator starts from the demonstrations' behavioural clone."""
         return starts_cloned(self.train, self.irl)
+
+    @property
+    def generator_late_starts(self) -> float:
+        """Up to what share of the time limit GAIL/AIRL's PPO generator starts its training episodes late."""
+        return late_starts(self.train, self.irl)
 
     def _discriminator_ignores(self) -> list[str]:
         """The terms the discriminator leaves out."""
