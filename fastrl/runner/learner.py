@@ -130,8 +130,14 @@ def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
             f"generator: episodes after the first start up to {late:.0%} of the time limit late "
             "(irl.generator.late_starts)"
         )
-    meta = {"source": source, "n_envs": train.n_envs, "ppo": ppo, "cloned": cloned, "anchor": anchor}
-    meta["late_starts"] = late
+    meta = {
+        "source": source,
+        "n_envs": train.n_envs,
+        "ppo": ppo,
+        "cloned": cloned,
+        "anchor": anchor,
+        "late_starts": late,
+    }
     update_meta(run, generator=meta)
 
 

@@ -169,22 +169,27 @@ class IRL(Strict):
         return self.algorithm != "none"
 
 
+def ppo_generator(train: Train, irl: IRL) -> Generator | None:
+    """The `irl.generator` settings this run learns with: GAIL or AIRL on PPO only (None otherwise, or unset)."""
+    return irl.generator if irl.algorithm in ("gail", "airl") and train.algo == "PPO" else None
+
+
 def starts_cloned(train: Train, irl: IRL) -> bool:
     """Whether the run's PPO generator starts from the demonstrations' behavioural clone (`irl.generator.cloned`)."""
-    gen = irl.generator
-    return gen is not None and gen.cloned and irl.algorithm in ("gail", "airl") and train.algo == "PPO"
+    gen = ppo_generator(train, irl)
+    return gen is not None and gen.cloned
 
 
 def late_starts(train: Train, irl: IRL) -> float:
     """Up to what share of the time limit the PPO generator's training episodes start late (`irl.generator`)."""
-    gen = irl.generator
-    return gen.late_starts if gen is not None and irl.algorithm in ("gail", "airl") and train.algo == "PPO" else 0.0
+    gen = ppo_generator(train, irl)
+    return gen.late_starts if gen is not None else 0.0
 
 
 def learning_train(train: Train, irl: IRL) -> Train:
     """The train settings a run learns with: `train`, except that GAIL and AIRL on PPO take `irl.generator`'s."""
-    gen = irl.generator
-    if gen is None or irl.algorithm not in ("gail", "airl") or train.algo != "PPO":
+    gen = ppo_generator(train, irl)
+    if gen is None:
         return train
     update = {k: v for k, v in (("n_envs", gen.n_envs), ("ppo", gen.ppo)) if v is not None}
     return train.model_copy(update=update)
