@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from ..terms import OBSERVATION_TERMS, REWARD_FEATURES
+from ..terms import OBSERVATION_TERMS
 from . import geometry as geo
 from .anatomy import landmark_pose
 from .base import NonNeg, Pos, Strict, _fail, _raise
@@ -20,6 +20,7 @@ from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_SECONDS, MAX_SUBTASK
 from .loose import Cup, LooseBody, loose_errors
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
 from .shaft import Shaft
+from .state_reward import Observation, Reward
 from .training import Evaluate, Train
 
 
@@ -171,71 +172,6 @@ class Actions(Strict):
     max_insertion_rate: Pos = Field(0.04, description="rates: insertion rate at |a| = 1 (m/s)")
     max_roll_rate_deg: Pos = Field(80.0, description="rates: roll rate at |a| = 1 (deg/s)")
     max_ang_speed: Pos = Field(2.0, description="continuous: cap on the commanded angular speed (rad/s)")
-
-
-class Observation(Strict):
-    """The paper's state, with options; `extra` adds registered terms by name."""
-
-    state: Literal["full", "camera_position"] = Field(
-        "full",
-        description="camera_position: the paper's liver-tour state, the camera position in R^3, then the `extra` terms "
-        "(the liver spec adds the cue for its policy and keeps them from the reward with irl.discriminator.ignore)",
-    )
-    velocities: bool = True
-    goal: bool = True
-    egocentric: bool = False
-    extra: list[str] = []
-    stack: int = Field(1, ge=1, le=16)
-
-    @model_validator(mode="after")
-    def _known(self):
-        _raise(
-            [
-                (("extra", i), f"unknown observation term '{name}' (known: {', '.join(OBSERVATION_TERMS)})", name)
-                for i, name in enumerate(self.extra)
-                if name not in OBSERVATION_TERMS
-            ]
-        )
-        return self
-
-    def terms(self) -> list[str]:
-        """Observation term names in order."""
-        if self.state == "camera_position":
-            return ["camera_position"] + [n for n in self.extra if n != "camera_position"]
-        names = ["tip_pos", "tip_quat"]
-        names += ["tip_vel", "tip_quat_rate"] if self.velocities else []
-        names += ["target_pos", "target_quat"] if self.goal else []
-        names += ["alignment"]
-        if self.egocentric:
-            names += ["target_in_camera", "horizon_error", "distance_error", "dwell", "portal", "subtask_fraction"]
-        return names + [n for n in self.extra if n not in names]
-
-
-class Feature(Strict):
-    """One reward feature's weight and parameters."""
-
-    weight: float
-    params: dict[str, Any] = {}
-
-
-class Reward(Strict):
-    """r = w . phi(s) over registered features."""
-
-    gamma: float = Field(0.99, gt=0, le=1, description="discount used by the shaping feature")
-    features: dict[str, Feature] = Field(min_length=1)
-
-    @model_validator(mode="after")
-    def _known(self):
-        errors = []
-        for name, f in self.features.items():
-            if name not in REWARD_FEATURES:
-                known = ", ".join(REWARD_FEATURES)
-                errors.append((("features", name), f"unknown reward feature '{name}' (known: {known})", name))
-                continue
-            for key, problem in REWARD_FEATURES[name].check_params(f.params):
-                errors.append((("features", name, "params", key), problem, f.params[key]))
-        _raise(errors)
-        return self
 
 
 class TaskSpec(Strict):
