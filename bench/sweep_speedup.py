@@ -3,10 +3,13 @@
     python bench/sweep_speedup.py                         # 3 learning rates x 3 seeds of 20k-step TraceLines
     python bench/sweep_speedup.py --timesteps 5000 --json runs/bench/sweep_speedup.json
 
-Both halves run the same 9 ordinary runs (`start_run`, the spec's evaluation and recording included) in the
-same process invocation: first one after another in this process with torch's default threads (what a bench
-script's loop does), then as `fastrl sweep` does it (a local Ray, one CPU and one torch thread per trial).
-It prints both wall times, their ratio, the machine and its load before and after: run it on a quiet machine.
+Three timings of the same 9 ordinary runs (`start_run`, the spec's evaluation and recording included) in one
+process invocation: one after another in this process as `fastrl run` does them (torch's default threads, the
+spec's `train.workers`: both cores); one after another kept to one CPU each (one torch thread, one env process:
+what a sweep trial is); then as `fastrl sweep` does it (a local Ray, one CPU and one torch thread per trial).
+It prints the wall times, the ratios, the cores each half kept busy on average (machine-wide, from /proc/stat)
+and so the ceiling a sweep on this machine has (cores / the cores a run one after another keeps busy), the
+machine and its load before and after: run it on a quiet machine.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ import time
 from datetime import UTC, datetime
 from pathlib import Path
 
+import torch
 from rich.console import Console
 
 from fastrl.runner import start_run
@@ -45,16 +49,36 @@ def machine() -> dict:
     }
 
 
-def serial(folder: Path, manifest: dict) -> tuple[float, list[float]]:
+def busy_seconds() -> float | None:
+    """CPU seconds all cores of this machine have spent busy since boot (Linux /proc/stat), else None."""
+    try:
+        fields = Path("/proc/stat").read_text().splitlines()[0].split()[1:]
+    except OSError:
+        return None
+    user, nice, system, _idle, _iowait, irq, softirq, steal = (int(x) for x in fields[:8])
+    return (user + nice + system + irq + softirq + steal) / os.sysconf("SC_CLK_TCK")
+
+
+def cores_busy(busy0: float | None, seconds: float) -> float | None:
+    """Cores kept busy on average since `busy0` over `seconds` of wall time."""
+    busy1 = busy_seconds()
+    return None if busy0 is None or busy1 is None else round((busy1 - busy0) / seconds, 2)
+
+
+def serial(folder: Path, manifest: dict, one_cpu: bool) -> tuple[float, list[float]]:
     """The sweep's trials as ordinary runs one after another in this process; wall seconds, total and per run."""
-    quiet = Console(file=io.StringIO())
+    quiet, threads = Console(file=io.StringIO()), torch.get_num_threads()
+    extra = ["train.workers=1"] if one_cpu else []
+    torch.set_num_threads(1 if one_cpu else threads)
     t0, each = time.perf_counter(), []
-    for trial in manifest["trials"]:
-        t1 = time.perf_counter()
-        start_run(
-            folder / "spec.yaml", trial_overrides(trial), console=quiet, progress=False, into=folder / trial["name"]
-        )
-        each.append(time.perf_counter() - t1)
+    try:
+        for trial in manifest["trials"]:
+            t1 = time.perf_counter()
+            overrides = [*trial_overrides(trial), *extra]
+            start_run(folder / "spec.yaml", overrides, console=quiet, progress=False, into=folder / trial["name"])
+            each.append(time.perf_counter() - t1)
+    finally:
+        torch.set_num_threads(threads)
     return time.perf_counter() - t0, each
 
 
@@ -73,31 +97,55 @@ def main() -> None:
     try:
         before = machine()
         print(f"machine: {before['cpu']}, {before['cores']} cores, load average {before['load_avg']}", flush=True)
-        one_by_one = create_sweep(SPEC, base, grid, seeds, 1, root / "serial")
-        t_serial, serial_each = serial(one_by_one, json.loads((one_by_one / "sweep.json").read_text()))
-        print(f"one after another: {t_serial:.1f} s", flush=True)
+        halves = {}
+        for name, one_cpu in (("serial", False), ("serial_one_cpu", True)):
+            folder = create_sweep(SPEC, base, grid, seeds, 1, root / name)
+            busy0 = busy_seconds()
+            wall, each = serial(folder, json.loads((folder / "sweep.json").read_text()), one_cpu)
+            halves[name] = {"s": wall, "run_s": each, "cores_busy": cores_busy(busy0, wall)}
+            how = "kept to one CPU each" if one_cpu else "as fastrl run does them"
+            print(f"one after another, {how}: {wall:.1f} s, cores busy {halves[name]['cores_busy']}", flush=True)
         swept = create_sweep(SPEC, base, grid, seeds, 1, root / "sweep")
-        t0 = time.perf_counter()
+        busy0, t0 = busy_seconds(), time.perf_counter()
         failed = run_sweep(swept, None, Console(file=io.StringIO()))
         t_sweep = time.perf_counter() - t0
+        sweep_busy = cores_busy(busy0, t_sweep)
         after = machine()
         n = len(json.loads((swept / "sweep.json").read_text())["trials"])
         done = sum(r["seeds"] for r in summarize(swept)["rows"])
-        print(f"fastrl sweep (Ray Tune, 1 CPU per trial): {t_sweep:.1f} s  ({done}/{n} trials finished)")
-        print(f"speed-up: {t_serial / t_sweep:.2f}x  (load average after: {after['load_avg']})")
+        t_serial, t_one = halves["serial"]["s"], halves["serial_one_cpu"]["s"]
+        print(f"fastrl sweep (Ray Tune, 1 CPU per trial): {t_sweep:.1f} s, cores busy {sweep_busy} ({done}/{n} trials)")
+        print(f"speed-up: {t_serial / t_sweep:.2f}x over runs as fastrl run does (load after: {after['load_avg']})")
+        print(f"          {t_one / t_sweep:.2f}x over the same runs kept to one CPU each")
+        busy = halves["serial"]["cores_busy"]
+        ceiling = (os.cpu_count() or 1) / busy if busy else None
+        if ceiling:
+            print(f"ceiling on this machine: {ceiling:.2f}x (its {os.cpu_count()} cores / the {busy} a run keeps busy)")
         sweep_each = [t["wall_s"] for t in summarize(swept)["trials"] if t.get("wall_s") is not None]
-        alone, inside = sum(serial_each) / len(serial_each), sum(sweep_each) / max(len(sweep_each), 1)
-        print(f"per run: {alone:.1f} s one after another, {inside:.1f} s inside the sweep (two at a time)")
+        mean = lambda xs: sum(xs) / max(len(xs), 1)  # noqa: E731
+        print(
+            f"per run: {mean(halves['serial']['run_s']):.1f} s as fastrl run does them, "
+            f"{mean(halves['serial_one_cpu']['run_s']):.1f} s on one CPU, {mean(sweep_each):.1f} s inside the sweep"
+        )
         result = {
             "runs": n,
             "grid": grid,
             "seeds": seeds,
             "timesteps": args.timesteps,
             "serial_s": t_serial,
+            "serial_one_cpu_s": t_one,
             "sweep_s": t_sweep,
             "speedup": t_serial / t_sweep,
-            "serial_run_s": serial_each,
+            "speedup_over_one_cpu": t_one / t_sweep,
+            "ceiling": ceiling,
+            "serial_run_s": halves["serial"]["run_s"],
+            "serial_one_cpu_run_s": halves["serial_one_cpu"]["run_s"],
             "sweep_trial_s": sweep_each,
+            "cores_busy": {
+                "serial": busy,
+                "serial_one_cpu": halves["serial_one_cpu"]["cores_busy"],
+                "sweep": sweep_busy,
+            },
             "failed": failed,
             "machine_before": before,
             "machine_after": after,
