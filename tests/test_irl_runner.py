@@ -93,15 +93,17 @@ def test_irl_runs_end_to_end_from_a_spec(tmp_path, algorithm, extra, suffix):
     obs, infos, _ = replay(FastEnv(load_spec(run / "spec.yaml")), traj)
     assert nets.value(obs).shape == (len(obs),) and np.isfinite(nets.value(obs)).all()
     assert len(nets.policy(obs)) == len(obs)
-    if algorithm == "bc":
+    generator = json.loads((run / "meta.json").read_text()).get("generator")
+    with safe_open(str(run / "networks" / "policy.safetensors"), "pt") as f:
+        widths = {f.get_slice(k).get_shape()[0] for k in f.keys() if k.endswith("0.weight")}
+    if algorithm == "bc":  # BC fits the network a PPO generator starts from, not forward RL's
         assert not (run / "networks" / "reward.safetensors").exists()
+        assert generator["source"] == "irl.generator" and widths == {24}
+        assert "BC into PPO on 2 envs (irl.generator)" in res.output
         return
     with safe_open(str(run / "networks" / "reward.safetensors"), "pt") as f:
         disc = json.loads(f.metadata()["fastrl"])["discriminator"]
     assert disc["policy_term"] is ("train.algo=SAC" not in extra)  # AIRL on SAC: f alone by default
-    generator = json.loads((run / "meta.json").read_text()).get("generator")
-    with safe_open(str(run / "networks" / "policy.safetensors"), "pt") as f:
-        widths = {f.get_slice(k).get_shape()[0] for k in f.keys() if k.endswith("0.weight")}
     if "train.algo=SAC" in extra:  # the generator block is for PPO: SAC learns with train.sac
         assert generator is None and "generator:" not in res.output and 24 not in widths
     else:

@@ -1,4 +1,4 @@
-"""Behavioural cloning: fit the spec's PPO policy to demonstrated (observation, action) pairs."""
+"""Behavioural cloning: fit a PPO policy to demonstrated (observation, action) pairs."""
 
 from __future__ import annotations
 

@@ -109,13 +109,14 @@ def demonstrations(spec: TaskSpec, run: Path, console: Console, progress: bool) 
 
 
 def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
-    """Print the PPO generator's envs and hyperparameters, and where they come from; keep them in meta.json."""
+    """Print the PPO generator's (or BC's) envs and hyperparameters and where they come from; keep them in meta.json."""
     train = spec.learning()
     gen = spec.irl.generator
     source = "irl.generator" if gen is not None and (gen.n_envs, gen.ppo) != (None, None) else "train"
     ppo = train.ppo.model_dump()
+    who = "BC into" if spec.irl.algorithm == "bc" else "generator:"
     console.print(
-        f"generator: PPO on {train.n_envs} envs ({source}): " + ", ".join(f"{k} {v}" for k, v in ppo.items()),
+        f"{who} PPO on {train.n_envs} envs ({source}): " + ", ".join(f"{k} {v}" for k, v in ppo.items()),
         markup=False,
         highlight=False,
     )
@@ -149,6 +150,7 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     if irl.algorithm in ("none", "bc"):
         learner = Learner(spec, venv, build_model(spec, venv))
         if irl.algorithm == "bc":
+            log_generator(spec, run, console)
             learner.demos = demonstrations(spec, run, console, progress)
         return learner
     off_policy = spec.train.kind.off_policy

@@ -147,7 +147,7 @@ class Generator(Strict):
 
 
 class BehaviourCloning(Strict):
-    """Behavioural cloning of the demonstrated actions into the spec's PPO policy."""
+    """Behavioural cloning of the demonstrated actions into the PPO policy of `irl.generator` (else `train.ppo`)."""
 
     epochs: int = Field(20, ge=1)
     learning_rate: float = Field(1e-3, gt=0)
@@ -187,8 +187,9 @@ def late_starts(train: Train, irl: IRL) -> float:
 
 
 def learning_train(train: Train, irl: IRL) -> Train:
-    """The train settings a run learns with: `train`, except that GAIL and AIRL on PPO take `irl.generator`'s."""
-    gen = ppo_generator(train, irl)
+    """The train settings a run learns with: `train`, except that GAIL and AIRL on PPO take `irl.generator`'s, and
+    so does BC: it fits the network such a generator starts from, not forward RL's (tuned for the heuristic reward)."""
+    gen = irl.generator if irl.algorithm == "bc" else ppo_generator(train, irl)
     if gen is None:
         return train
     update = {k: v for k, v in (("n_envs", gen.n_envs), ("ppo", gen.ppo)) if v is not None}
