@@ -1,5 +1,7 @@
 """Behavioural cloning from scripted-expert demonstrations: accuracy, training time, evaluation.
 
+The policy network is BC's (`irl.algorithm: bc`): `irl.generator`'s, the one a cloned generator starts from.
+
 python bench/bc_baseline.py [--spec specs/tracelines.yaml] [--demos 20] [--epochs 30]
 """
 
@@ -27,7 +29,7 @@ def main() -> None:
     ap.add_argument("--demos", type=int, default=20)
     ap.add_argument("--epochs", type=int, default=30)
     args = ap.parse_args()
-    spec = load_spec(args.spec)
+    spec = load_spec(args.spec, ["irl.algorithm=bc"])
     trajs = expert_trajectories(FastEnv(spec), range(args.demos))
     obs, actions = demonstration_pairs(FastEnv(spec), trajs)
     venv = make_vec_env(spec, 1, 0)

@@ -166,15 +166,16 @@ def report(args) -> None:
                 f"{row['train_seconds'] / 60:.1f} min | {row['final_success']:.0%} | "
                 f"{row['final_subtasks']:.1%} ({expert:.0%}) |"
             )
+            label = "BC (20 demos)" if algo == "bc" else algo.upper()
+            seen = label in ax.get_legend_handles_labels()[1]  # one legend entry per algorithm
             if algo == "bc":  # no training loop: its final evaluation, as a level
-                ax.axhline(row["final_subtasks"], color="black", ls="--", lw=1, label="BC (20 demos)")
+                ax.axhline(row["final_subtasks"], color="black", ls="--", lw=1, label=None if seen else label)
             else:
-                seen = algo.upper() in ax.get_legend_handles_labels()[1]  # one legend entry per algorithm
                 ax.plot(
                     [0, *steps],
                     [0, *subs],
                     marker=".",
-                    label=None if seen else algo.upper(),
+                    label=None if seen else label,
                     color=f"C{ALGOS.index(algo)}",
                 )
         ax.axhline(0.9, color="grey", ls=":", lw=1)
