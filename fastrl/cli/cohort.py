@@ -18,6 +18,10 @@ def cohort(
     per_level: Annotated[int, typer.Option(help="trajectories (subjects) per level")] = 10,
     output: Annotated[Path, typer.Option("-o", "--output", help="folder for the .npz files")] = Path("cohort"),
     seed: Annotated[int, typer.Option(help="seed of the first trajectory (then seed+1, ...)")] = 0,
+    families: Annotated[
+        str,
+        typer.Option(help="deficit families the subjects mix, comma-separated, or 'all' (fastrl.data.families)"),
+    ] = "classic",
     set_: SetOpt = None,
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
 ) -> None:
@@ -25,11 +29,17 @@ def cohort(
     from rich.progress import Progress
 
     from ..data.cohort import level_table, make_cohort, replayed_figures
+    from ..data.families import family_names
     from ..env.fast_env import FastEnv
 
     if levels < 2 or per_level < 1:
         err.print(f"need --levels >= 2 and --per-level >= 1, got {levels} and {per_level}", markup=False)
         raise typer.Exit(code=2)
+    try:
+        mixed = family_names(families)
+    except ValueError as e:
+        err.print(f"--families: {e}", markup=False)
+        raise typer.Exit(code=2) from None
     task = load_or_exit(spec, set_)
     if task.spec.actions.mode != "discrete":
         err.print(
@@ -40,7 +50,7 @@ def cohort(
     rows = []
     with Progress(disable=not progress) as bar:
         job = bar.add_task(f"cohort of {task.spec.name}", total=levels * per_level)
-        for traj in make_cohort(task.spec, levels, per_level, seed, env=env):
+        for traj in make_cohort(task.spec, levels, per_level, seed, env=env, families=mixed):
             try:
                 traj.save(output / f"{traj.meta['subject']}.npz")
             except OSError as e:

@@ -8,9 +8,9 @@ import numpy as np
 
 from ..env.fast_env import FastEnv
 from ..spec.models import TaskSpec
+from .families import draw_mix, mixed_profile
 from .hands_trainee import TwoHandTrainee
 from .replay import replay, rollout_trajectory
-from .skill import NOVICE, SkillProfile, profile_for_level
 from .trainee import Trainee
 from .trajectory import Trajectory
 
@@ -25,23 +25,26 @@ def make_cohort(
     levels: int,
     per_level: int,
     seed: int = 0,
-    novice: SkillProfile = NOVICE,
     env: FastEnv | None = None,
+    families: tuple[str, ...] = ("classic",),
 ) -> Iterator[Trajectory]:
-    """Yield per_level trajectories for each level 1..levels (seeds seed, seed+1, ... in that order)."""
-    profiles = [profile_for_level(level, levels, novice) for level in range(1, levels + 1)]
+    """Yield per_level trajectories for each level 1..levels (seeds seed, seed+1, ... in that order); each subject
+    mixes the deficit `families` in shares of its own (fastrl.data.families), the level setting their total."""
     if per_level < 1:
         raise ValueError(f"per_level must be at least 1, got {per_level}")
     env = env or FastEnv(spec)
-    for level, profile in enumerate(profiles, start=1):
+    for level in range(1, levels + 1):
         for i in range(per_level):
             s = seed + (level - 1) * per_level + i
+            mix = draw_mix(families, s)
+            profile = mixed_profile(mix, level, levels)
             trainee = (TwoHandTrainee if env.task.instruments else Trainee)(env, profile, s)
             meta = {
                 "source": "synthetic",
                 "subject": subject_name(level, i + 1),
                 "skill": level,
                 "levels": levels,
+                "families": mix,
                 "profile": profile.as_dict(),
             }
             yield rollout_trajectory(env, trainee.act, s, meta, trainee.reset)[0]

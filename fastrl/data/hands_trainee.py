@@ -6,6 +6,7 @@ import numpy as np
 
 from ..agents.expert import ScriptedExpert
 from .skill import SkillProfile
+from .trainee import paced
 
 PAUSE_STEPS = 8  # mean length of a hesitation pause beyond its first step
 
@@ -13,8 +14,9 @@ PAUSE_STEPS = 8  # mean length of a hesitation pause beyond its first step
 class TwoHandTrainee:
     """A discrete policy with `act(obs)` and `reset()`, deterministic given its seed; a zero profile is the expert.
 
-    Of a SkillProfile it uses `motor_noise` (a random movement of either hand instead of the intended one) and
-    `hesitation` (idle pauses); the scope-only deviations (tremor, delay, overshoot, wander, optics) do not apply.
+    Of a SkillProfile it uses the deviations of either hand's actions: `motor_noise` (a random movement instead of
+    the intended one), `hesitation` and `idle` (pauses), `slowness` and `dither`; the scope's own (tremor, delay,
+    overshoot, wander, optics, depth, aim, horizon, detour, bump) do not apply.
     """
 
     def __init__(self, env, profile: SkillProfile, seed: int = 0):
@@ -31,7 +33,7 @@ class TwoHandTrainee:
         if seed is not None:
             self.seed = int(seed)
         self.rng = np.random.default_rng(self.seed)
-        self.pause = 0
+        self.pause, self.subtask = 0, -1
         self.expert.reset()
 
     def act(self, obs=None) -> int:
@@ -44,6 +46,10 @@ class TwoHandTrainee:
         if p.hesitation and self.rng.random() < p.hesitation:
             self.pause = int(self.rng.poisson(PAUSE_STEPS))
             return 0
-        if p.motor_noise and self.rng.random() < p.motor_noise:
-            return int(self.rng.integers(1, self.n))
-        return action
+        if p.idle and self.subtask != self.env.done_count:  # a new target: plan before the first move
+            self.subtask = self.env.done_count
+            self.pause = int(self.rng.poisson(p.idle * self.env.task_spec.episode.control_hz))
+            if self.pause:
+                self.pause -= 1
+                return 0
+        return paced(p, self.rng, action, self.n)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
 
-PROBABILITIES = ("motor_noise", "hesitation", "wander", "optics")
+PROBABILITIES = ("motor_noise", "hesitation", "wander", "optics", "slowness", "detour", "dither", "bump")
 
 
 @dataclass(frozen=True)
@@ -18,6 +18,14 @@ class SkillProfile:
     hesitation: float = 0.0  # probability per step of starting an idle pause (about 0.5 s)
     wander: float = 0.0  # probability of a random search sweep instead of a direct move, target out of view
     optics: float = 0.0  # probability per subtask of solving the view by moving the shaft, not the cable
+    idle: float = 0.0  # mean planning pause (s) before the first move toward each new avatar
+    slowness: float = 0.0  # probability that a step meant to move waits instead (slow, deliberate movement)
+    depth: float = 0.0  # sd (increments) of a misjudged insertion depth per avatar, halved whenever noticed
+    aim: float = 0.0  # sd (increments) of a misjudged pitch and yaw per avatar (view off-centre), halved when noticed
+    horizon: float = 0.0  # sd (increments) of a misjudged roll per avatar (tilted horizon), halved when noticed
+    detour: float = 0.0  # probability per avatar of heading first for a wrong place near it
+    dither: float = 0.0  # probability that a step meant to move goes the opposite way (back-and-forth corrections)
+    bump: float = 0.0  # probability per step of pushing the scope in until it touches something, then backing out
 
     def __post_init__(self):
         for f in fields(self):
@@ -31,6 +39,11 @@ class SkillProfile:
     def scaled(self, g: float) -> SkillProfile:
         """Every parameter times g (g = 0: the expert)."""
         return SkillProfile(**{k: v * g for k, v in asdict(self).items()})
+
+    def plus(self, other: SkillProfile) -> SkillProfile:
+        """Both profiles' deviations at once (probabilities capped at 1)."""
+        both = {k: v + getattr(other, k) for k, v in asdict(self).items()}
+        return SkillProfile(**{k: min(v, 1.0) if k in PROBABILITIES else v for k, v in both.items()})
 
     def as_dict(self) -> dict[str, float]:
         """The parameters by name (for trajectory metadata)."""

@@ -17,6 +17,9 @@ SWEEP_STEPS = (5, 20)  # length of a search sweep, or of a committed direct move
 SEARCH_MOVES = (1, 2, 3, 4, 9, 10)  # pitch, yaw and light cable: what sweeps the view round
 SHAFT_HABIT = (0.0, 2.0)  # (pivot, cable) weights of a view solved by moving the shaft
 REACHED = 0.6  # |error| below this many increments: the coordinate is there
+NOTICE = 10  # steps at a misjudged goal without completing the avatar before the trainee notices and corrects
+DETOUR = 12.0  # increments of pitch and yaw between a detour's wrong place and the right one
+BUMP_STEPS = 40  # most steps a bump pushes the scope in (the first contact stops it)
 
 
 class Trainee:
@@ -49,6 +52,10 @@ class Trainee:
         self.sweep_action = self.last = 0
         self.overshot, self.subtask = set(), -1
         self.shaken = np.zeros(2)  # increments of pitch and yaw made by the tremor so far
+        self.misjudged = np.zeros(5)  # the trainee's error in judging the goal (depth, aim, horizon)
+        self.waypoint = np.zeros(5)  # a wrong place headed for first (detour, bump), dropped once there
+        self.settled = 0  # steps spent at the perceived goal
+        self.push = 0  # steps left of pushing the scope in (a bump)
         self.cycle, self.dither = np.full(2, -1.0), np.zeros(2)
 
     def act(self, obs=None) -> int:
@@ -66,6 +73,8 @@ class Trainee:
         if self.extra > 0:
             self.extra -= 1
             return self._slip(self.last)
+        if self.push > 0 or (p.bump and self.rng.random() < p.bump):
+            return self._bump()
         if self.wait > 0:  # waiting to see the effect of a fine move
             self.wait -= 1
             return 0
@@ -119,10 +128,15 @@ class Trainee:
         p = self.profile
         if self.subtask != k:
             self._new_subtask(k)
-        err = self.expert.error(q, k)
+        err = self.expert.error(q, k) + self.misjudged + self.waypoint
         if self.profile.tremor:  # the trainee aims through the shake, not at correcting it
             err[:2] += self.shaken * self.steps[:2]
         action = int(self.expert.to_action(err))
+        if self.pause > 0:  # a new avatar: plan before the first move
+            self.pause -= 1
+            return 0
+        if self.misjudged.any() or self.waypoint.any():
+            action = self._judged(action)
         if p.overshoot and self.last and action != self.last:
             c = (self.last - 1) // 2
             if c not in self.overshot and abs(err[c]) < REACHED * self.steps[c]:
@@ -138,14 +152,56 @@ class Trainee:
         return action
 
     def _new_subtask(self, k: int) -> None:
-        """Per subtask: may overshoot again; with poor optics, may solve the view by moving the shaft."""
+        """Per subtask: may overshoot again; with poor optics, may solve the view by moving the shaft; plans,
+        misjudges the goal, heads for a wrong place first or pushes in until it touches, as the profile says."""
+        p, rng = self.profile, self.rng
         self.subtask, self.overshot = k, set()
-        shaft = self.profile.optics and self.rng.random() < self.profile.optics
+        shaft = p.optics and rng.random() < p.optics
         self.expert.pivot_weight, self.expert.cable_weight = SHAFT_HABIT if shaft else self.optics_weights
+        if p.idle:
+            self.pause = int(rng.poisson(p.idle * self.env.task_spec.episode.control_hz))
+        sd = np.array([p.aim, p.aim, p.depth, p.horizon, 0.0])
+        self.misjudged = rng.normal(0.0, 1.0, 5) * sd * self.steps if sd.any() else np.zeros(5)
+        self.waypoint, self.settled = np.zeros(5), 0
+        if p.detour and rng.random() < p.detour:
+            turn = rng.uniform(0.0, 2.0 * math.pi)
+            self.waypoint[:2] = DETOUR * np.array([math.cos(turn), math.sin(turn)]) * self.steps[:2]
+
+    def _bump(self) -> int:
+        """Push the scope in until it touches something (or BUMP_STEPS pass); the goal then draws it back."""
+        if self.push == 0:
+            self.push = BUMP_STEPS
+        self.push = 0 if self.env.state.contacts else self.push - 1
+        return 5 if self.push else 0
+
+    def _judged(self, action: int) -> int:
+        """Correct a misjudged goal: a wrong place is left once reached; a misjudged one is halved after NOTICE
+        steps there without the avatar completing."""
+        if action:
+            self.settled = 0
+            return action
+        self.settled += 1
+        if self.waypoint.any():
+            self.waypoint[:], self.settled = 0.0, 0
+        elif self.settled >= NOTICE:
+            self.misjudged *= 0.5
+            self.misjudged[np.abs(self.misjudged) < REACHED * self.steps] = 0.0
+            self.settled = 0
+        return action
 
     def _slip(self, action: int) -> int:
-        """Motor noise: sometimes a random movement instead of the intended action."""
-        p = self.profile.motor_noise
-        if p and self.rng.random() < p:
-            return int(self.rng.integers(1, 11))
-        return int(action)
+        """Motor noise: sometimes a random movement instead of the intended action; a slow trainee waits instead
+        of some moves, a dithering one goes the opposite way."""
+        return paced(self.profile, self.rng, action, 11)
+
+
+def paced(p: SkillProfile, rng: np.random.Generator, action: int, n: int) -> int:
+    """An intended discrete action as moved: a random one of n (motor noise), none (slowness) or the opposite
+    movement (dither); a no-op stays one."""
+    if p.motor_noise and rng.random() < p.motor_noise:
+        return int(rng.integers(1, n))
+    if action and p.slowness and rng.random() < p.slowness:
+        return 0
+    if action and p.dither and rng.random() < p.dither:
+        return int(action + 1 if (action - 1) % 2 == 0 else action - 1)
+    return int(action)

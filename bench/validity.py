@@ -1,0 +1,132 @@
+"""Do the learned scores hold on trainees of every deficit family? The paper's protocol per family, beside the clock.
+
+    python bench/validity.py --tasks tracelines --seeds 0                       # every family, one seed
+    python bench/validity.py --tasks tracelines periscoping imagecentring --seeds 0 1 2
+    python bench/validity.py --tasks triangulation --families classic flow speed corrections
+    python bench/validity.py --from-json docs/validity.json                     # re-print earlier results
+
+For each task and each trainee family (fastrl.data.families; `mixed`: every family, each subject its own mix), a
+cohort of 5 levels x 10 subjects is written without actions (seed 0, under ROOT/TASK/FAMILY/cohort), then
+`fastrl assess COHORT --spec specs/TASK.yaml --top 10` (AIRL, the spec's generator; `train.seed` = each --seeds)
+learns from the best 10 and scores all 50. Printed per task, family and seed: Kendall tau-b against the skill labels
+of the learned reward and value, the heuristic return, the stopwatch (time), the path length and the subtasks, with
+the sign that ranks. Leave-one-family-out holds by construction: the protocol sees no labels and no family, and its
+settings (the shipped specs) were fixed on the classic family before the other families existed; a family's row
+is never used to choose anything for that family. Writes --json (docs/validity.json).
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+from common import machine_line
+
+SCORES = ("reward", "value", "heuristic", "time", "path_length", "subtasks")
+ROOT = Path("runs/bench-validity")
+
+
+def cohort(task: str, family: str, root: Path) -> Path:
+    """The family's 5 x 10 cohort of the task without actions, written once (again when the task has changed)."""
+    from fastrl.data.cohort import make_cohort
+    from fastrl.data.families import FAMILIES
+    from fastrl.data.trajectory import Trajectory
+    from fastrl.spec import load_spec, task_hash
+
+    spec = load_spec(f"specs/{task}.yaml")
+    out = root / task / family / "cohort"
+    files = sorted(out.glob("*.npz"))
+    if len(files) == 50 and Trajectory.load(files[0]).meta.get("task_hash") == task_hash(spec):
+        return out
+    out.mkdir(parents=True, exist_ok=True)
+    families = tuple(FAMILIES) if family == "mixed" else (family,)
+    for traj in make_cohort(spec, 5, 10, seed=0, families=families):
+        bare = Trajectory(traj.time, traj.portal, traj.meta, instruments=traj.instruments, bodies=traj.bodies)
+        bare.save(out / f"{traj.meta['subject']}.npz")
+    return out
+
+
+def measure(task: str, family: str, seed: int, root: Path) -> dict:
+    """One protocol run on the family's cohort: tau-b of every score, and its wall time."""
+    from rich.console import Console
+
+    from fastrl.runner.protocol import run_protocol
+
+    folder = cohort(task, family, root)
+    t0 = time.perf_counter()
+    done = run_protocol(
+        [folder],
+        Path(f"specs/{task}.yaml"),
+        top=10,
+        overrides=[f"train.seed={seed}"],
+        root=root / task / family / "runs",
+        console=Console(stderr=True, quiet=True),
+        progress=False,
+        pictures=False,
+    )
+    ranking = done.assessment.report["ranking"]
+    taus = {k: ranking[k]["kendall_tau_b"] for k in SCORES if k in ranking}
+    return {"task": task, "family": family, "seed": seed, "tau_b": taus, "seconds": time.perf_counter() - t0}
+
+
+def table(rows: list[dict]) -> str:
+    """Markdown table: one row per task, family and seed; a learned score in bold where it ties or beats the clock."""
+    head = "| task | family | seed | " + " | ".join(SCORES) + " | wall |"
+    lines = [head, "|" + "---|" * (len(SCORES) + 4)]
+    for r in rows:
+        t = r["tau_b"]
+        simple = max(t.get("time") or -1, t.get("path_length") or -1)
+        cells = []
+        for k in SCORES:
+            v = t.get(k)
+            text = "-" if v is None else f"{v:.2f}"
+            cells.append(f"**{text}**" if k in ("reward", "value") and v is not None and v >= simple else text)
+        lines.append(
+            f"| {r['task']} | {r['family']} | {r['seed']} | " + " | ".join(cells) + f" | {r['seconds']:.0f} s |"
+        )
+    return "\n".join(lines)
+
+
+def main() -> None:
+    from fastrl.data.families import FAMILIES
+
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--tasks", nargs="+", default=["tracelines"])
+    parser.add_argument("--families", nargs="+", default=[*FAMILIES, "mixed"])
+    parser.add_argument("--seeds", nargs="+", type=int, default=[0])
+    parser.add_argument("--root", type=Path, default=ROOT)
+    parser.add_argument("--json", type=Path, default=Path("docs/validity.json"))
+    parser.add_argument("--from-json", type=Path, help="print the table of an earlier run and stop")
+    args = parser.parse_args()
+    if args.from_json:
+        print(table(json.loads(args.from_json.read_text())["rows"]))
+        return
+    unknown = [f for f in args.families if f not in FAMILIES and f != "mixed"]
+    if unknown:
+        parser.error(f"unknown family {unknown[0]}: choose from {', '.join(FAMILIES)}, mixed")
+    started = {"machine": machine_line(), "utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime())}
+    print(f"# {started['utc']} UTC, {started['machine']}", flush=True)
+    rows = []
+    for task in args.tasks:
+        for family in args.families:
+            for seed in args.seeds:
+                rows.append(measure(task, family, seed, args.root))
+                t = rows[-1]["tau_b"]
+                print(
+                    f"{task} {family} s{seed}: " + ", ".join(f"{k} {t[k]:.2f}" for k in t if t[k] is not None),
+                    flush=True,
+                )
+                args.json.parent.mkdir(parents=True, exist_ok=True)
+                args.json.write_text(json.dumps({**started, "rows": rows}, indent=1))
+    print(f"# ended {time.strftime('%H:%M', time.gmtime())} UTC, {machine_line()}")
+    print(table(rows))
+
+
+if __name__ == "__main__":
+    main()
