@@ -141,8 +141,8 @@ def protocol(task: str, inputs: Path, keep: bool, args) -> dict:
     )
     seconds = time.perf_counter() - t0
     report = done.assessment.report
-    ev = json.loads((done.learned / "eval.json").read_text())["agent"]
-    meta = json.loads((done.learned / "meta.json").read_text())
+    ev = json.loads((done.learned[0] / "eval.json").read_text())["agent"]
+    meta = json.loads((done.learned[0] / "meta.json").read_text())
     out = {
         "run": str(done.run),
         "chosen": [r["file"] for r in done.chosen],

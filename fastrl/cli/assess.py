@@ -21,6 +21,9 @@ def assess_cohort(
     top: Annotated[int, typer.Option("--top", metavar="K", help="learn from the K best recordings")] = 10,
     by: Annotated[str, typer.Option(help="rank by heuristic, length (path) or time")] = "heuristic",
     algorithm: Annotated[str, typer.Option(help="airl or gail")] = "airl",
+    seeds: Annotated[
+        int, typer.Option(help="learn N scorers (train.seed and the next ones): mean, spread and agreement")
+    ] = 1,
     set_: SetOpt = None,
     output: Annotated[
         Path | None,
@@ -52,6 +55,7 @@ def assess_cohort(
             console=err,
             progress=progress,
             pictures=pictures,
+            seeds=seeds,
         )
     except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
         report_stop(stop)  # the learned run resumes with fastrl run --resume; rerun assess to score
@@ -65,6 +69,8 @@ def assess_cohort(
     for warning in report["warnings"]:
         err.print(f"note: {warning}", markup=False, style="yellow")
     print_report(report)
+    if "seeds" in report:
+        print_agreement(report["seeds"])
     out.print(done.why, markup=False)
     for row in done.chosen:
         out.print(
@@ -73,6 +79,22 @@ def assess_cohort(
             markup=False,
         )
     out.print(f"scored {len(report['trajectories'])} trajectories; {len(problems)} skipped")
-    out.print(f"  learned networks: {escape(str(done.learned))} (fastrl score --run {escape(str(done.learned))} ...)")
+    for learned in done.learned:
+        out.print(f"  learned networks: {escape(str(learned))} (fastrl score --run {escape(str(learned))} ...)")
     for kind, path in done.assessment.files.items():
         out.print(f"  {kind}: {escape(str(path))}")
+
+
+def print_agreement(seeds: dict) -> None:
+    """How far the seeds' learned scores agree with each other and with the simple metrics."""
+    from rich.table import Table
+
+    simple = list(next(iter(seeds["with_simple_metrics"].values()), {}))
+    t = Table(title=f"learned scores over seeds {', '.join(map(str, seeds['seeds']))}: Kendall tau")
+    for col in ("score", "between seeds: mean (min)", *(f"with {s}" for s in simple)):
+        t.add_column(col, justify="right")
+    for key, a in seeds["agreement"].items():
+        between = "-" if a["mean_tau"] is None else f"{a['mean_tau']:.2f} ({a['min_tau']:.2f})"
+        cells = ["-" if v is None else f"{v:.2f}" for v in seeds["with_simple_metrics"][key].values()]
+        t.add_row(key, between, *cells)
+    out.print(t)

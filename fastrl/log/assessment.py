@@ -81,6 +81,20 @@ def markdown_table(report: dict) -> str:
                 f"| {k} | {fmt(r['spearman'], r['spearman_ci'])} | {fmt(r['kendall_tau_b'], r['kendall_ci'])}"
                 f" | {'yes' if r['levels_in_order'] else 'no'} |"
             )
+    if "seeds" in report:
+        lines += ["", f"## Agreement over seeds {', '.join(map(str, report['seeds']['seeds']))}", ""]
+        lines += [
+            "| learned score | seeds' mean (min) Kendall tau | "
+            + " | ".join(f"tau with {s}" for s in next(iter(report["seeds"]["with_simple_metrics"].values()), {}))
+            + " |"
+        ]
+        lines += ["|---|---|" + "---|" * len(next(iter(report["seeds"]["with_simple_metrics"].values()), {}))]
+        for k, a in report["seeds"]["agreement"].items():
+            simple = report["seeds"]["with_simple_metrics"][k]
+            tau = "-" if a["mean_tau"] is None else f"{a['mean_tau']:.2f} ({a['min_tau']:.2f})"
+            lines.append(
+                f"| {k} | {tau} | " + " | ".join("-" if v is None else f"{v:.2f}" for v in simple.values()) + " |"
+            )
     lines += ["", report["normalisation"]] + [f"\n_Note: {w}_" for w in report.get("warnings", [])]
     if report["problems"]:
         lines += ["", "## Files not scored", ""] + [f"- {p}" for p in report["problems"]]
@@ -122,17 +136,46 @@ def log_assessment(
                     indexes=[rr.TimeColumn("percent", sequence=np.arange(len(d)))],
                     columns=rr.Scalars.columns(scalars=d),
                 )
-        for k in report["scores"]:
-            means = [g[k] if g[k] is not None else np.nan for g in report["groups"]]
-            rec.log(f"assessment/scores/{k}", rr.BarChart(np.nan_to_num(np.array(means, float))), static=True)
-        rec.log(
-            "assessment/summary", rr.TextDocument(markdown_table(report), media_type=rr.MediaType.MARKDOWN), static=True
-        )
+        _log_summary(rec, report)
         rec.send_blueprint(_blueprint(report))
     finally:
         rec.flush()
         rec.disconnect()
     return Path(path)
+
+
+def log_summary(path: Path, recording_id: str, report: dict) -> Path:
+    """An .rrd of the group means and the summary table alone (scores over several seeds: no one set of paths)."""
+    skip_pandas_probe()
+    rec = rr.RecordingStream("fastrl", recording_id=recording_id)
+    rec.set_log_time_enabled(False)
+    rec.save(path)
+    try:
+        _log_summary(rec, report)
+        bars = [rrb.BarChartView(origin=f"/assessment/scores/{k}", name=k) for k in report["scores"]]
+        rec.send_blueprint(
+            rrb.Blueprint(
+                rrb.Horizontal(
+                    rrb.TextDocumentView(origin="/assessment/summary", name="scores"),
+                    rrb.Tabs(*bars, name="group means"),
+                ),
+                collapse_panels=True,
+            )
+        )
+    finally:
+        rec.flush()
+        rec.disconnect()
+    return Path(path)
+
+
+def _log_summary(rec: rr.RecordingStream, report: dict) -> None:
+    """Each score's group means as a bar chart, and the markdown table."""
+    for k in report["scores"]:
+        means = [g[k] if g[k] is not None else np.nan for g in report["groups"]]
+        rec.log(f"assessment/scores/{k}", rr.BarChart(np.nan_to_num(np.array(means, float))), static=True)
+    rec.log(
+        "assessment/summary", rr.TextDocument(markdown_table(report), media_type=rr.MediaType.MARKDOWN), static=True
+    )
 
 
 def _blueprint(report: dict) -> rrb.Blueprint:

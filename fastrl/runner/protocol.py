@@ -9,13 +9,14 @@ from pathlib import Path
 
 from rich.console import Console
 
+from ..assess.report import csv_text
 from ..assess.scoring import Scorer, TrajectoryScores, foreign_problem
 from ..atomic import write_text
 from ..data.inverse import to_control_rate
 from ..data.recordings import load_recordings
 from ..data.trajectory import Trajectory, TrajectoryError
 from ..spec import load_spec
-from .assessment import Assessment, assess
+from .assessment import Assessment, assess, outputs_for
 from .rundir import new_run_dir, update_meta, write_meta
 
 BY = {
@@ -28,10 +29,11 @@ ALGORITHMS = ("airl", "gail")
 
 @dataclass
 class Protocol:
-    """What one `fastrl assess` did: where, from which recordings it learned and why, what it skipped."""
+    """What one `fastrl assess` did: where, from which recordings it learned (one run per seed) and why, what it
+    skipped."""
 
     run: Path
-    learned: Path
+    learned: list[Path]
     chosen: list[dict]
     why: str
     assessment: Assessment
@@ -98,9 +100,11 @@ def run_protocol(
     progress: bool = True,
     pictures: bool = True,
     keep_actions: bool = False,
+    seeds: int = 1,
 ) -> Protocol:
-    """Rank, choose the best `top`, learn from them without actions, score everything; return what was done.
-    `keep_actions` (bench/learn_from_people.py's comparison) learns from the recorded actions where there are."""
+    """Rank, choose the best `top`, learn from them without actions on `seeds` training seeds (the spec's and the
+    next ones), score everything; return what was done. `keep_actions` (bench/learn_from_people.py's comparison)
+    learns from the recorded actions where there are."""
     from .run import start_run
 
     console = console or Console(stderr=True)
@@ -110,6 +114,8 @@ def run_protocol(
         raise ValueError(f"--algorithm must be one of {', '.join(ALGORITHMS)}, got {algorithm!r}")
     if top < 1:
         raise ValueError(f"--top must be at least 1, got {top}")
+    if seeds < 1:
+        raise ValueError(f"--seeds must be at least 1, got {seeds}")
     spec = load_spec(spec_path, overrides)
     ranked, skipped = rank_recordings(spec, inputs, by)
     if not ranked:
@@ -126,27 +132,31 @@ def run_protocol(
         + ("; their recorded actions kept" if keep_actions else "; their actions dropped, recovered from their states")
     )
     console.print(why, markup=False, highlight=False)
-    learned = start_run(
-        spec_path,
-        [
-            *overrides,
-            f"irl.algorithm={algorithm}",
-            f"irl.demonstrations.path={run / 'best'}",
-            "experiment.enabled=false",
-        ],
-        console=console,
-        progress=progress,
-        into=run / "learned",
-    )
+    trained = [spec.train.seed + i for i in range(seeds)]
+    learned = [
+        start_run(
+            spec_path,
+            [
+                *overrides,
+                f"irl.algorithm={algorithm}",
+                f"irl.demonstrations.path={run / 'best'}",
+                "experiment.enabled=false",
+                *([f"train.seed={seed}"] if seeds > 1 else []),
+            ],
+            console=console,
+            progress=progress,
+            into=run / ("learned" if seeds == 1 else f"learned-s{seed}"),
+        )
+        for seed in trained
+    ]
     update_meta(run, status="scoring")
-    result = assess(
-        list(inputs),
-        run=learned,
-        output=output or run / "scores.json",
-        console=console,
-        progress=progress,
-        pictures=pictures,
-    )
+    scores = output or run / "scores.json"
+    if seeds == 1:
+        result = assess(
+            list(inputs), run=learned[0], output=scores, console=console, progress=progress, pictures=pictures
+        )
+    else:
+        result = assess_seeds(inputs, learned, trained, scores, console, progress, pictures)
     summary = {
         "spec": spec.name,
         "by": by,
@@ -157,12 +167,46 @@ def run_protocol(
         "chosen": rows,
         "order": [s.name for s, _ in ranked],
         "skipped": skipped,
-        "learned": str(learned),
+        "learned": [str(p) for p in learned],
         "scores": {k: str(v) for k, v in result.files.items()},
     }
     write_text(run / "protocol.json", json.dumps(summary, indent=2, default=float))
     update_meta(run, status="done")
     return Protocol(run, learned, rows, why, result, skipped)
+
+
+def assess_seeds(
+    inputs, learned: list[Path], seeds: list[int], output: Path, console, progress, pictures
+) -> Assessment:
+    """Score every file with each seed's networks (reports under SEEDS/sN/ beside `output`), then as one: mean and
+    spread per trajectory, the seeds' agreement and the warnings (fastrl.assess.agreement)."""
+    from ..assess.agreement import combine
+
+    reports = []
+    for seed, run in zip(seeds, learned):
+        one = assess(
+            list(inputs),
+            run=run,
+            output=output.parent / "seeds" / f"s{seed}" / output.name,
+            console=console,
+            progress=progress,
+            pictures=False,
+        )
+        reports.append(one.report)
+    report = combine(reports, seeds)
+    files = outputs_for(output, None)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    write_text(files["csv"], csv_text(report))
+    done = Assessment(report, {"csv": files["csv"]})
+    if pictures:
+        from ..assess.figures import plot_distributions
+        from ..log.assessment import log_summary
+
+        done.files["distributions"] = plot_distributions(report, files["distributions"])
+        done.files["rrd"] = log_summary(files["rrd"], f"assessment-seeds-{seeds[0]}", report)
+    write_text(files["json"], json.dumps(report, indent=2, default=float))
+    done.files["json"] = files["json"]
+    return done
 
 
 def _criterion(s: TrajectoryScores) -> dict:
