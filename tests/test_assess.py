@@ -327,3 +327,17 @@ def test_fastrl_score_needs_a_run_or_a_spec(tmp_path):
         ],
     )
     assert res.exit_code == 2 and "no trajectory could be scored" in res.output
+
+
+def test_a_trajectory_that_stops_early_is_scored_as_held_still_to_the_time_limit():
+    spec = _spec()
+    scorer = Scorer(spec)
+    full = expert_trajectories(scorer.env, [0])[0]
+    n = len(full.time) // 3
+    cut = Trajectory(full.time[:n], full.portal[:n], full.meta)
+    whole, stopped = scorer.score(full), scorer.score(cut)
+    assert "held_still_s" not in whole.meta and whole.scores["time"] < spec.episode.time_limit
+    assert stopped.scores["time"] == pytest.approx(spec.episode.time_limit)
+    assert stopped.meta["held_still_s"] == pytest.approx(spec.episode.time_limit - cut.time[-1] + cut.time[0])
+    assert stopped.scores["path_length"] == pytest.approx(path_length(stopped.tip[:n]))  # held: no more path
+    assert stopped.scores["heuristic"] < whole.scores["heuristic"] and not stopped.meta["success"]

@@ -103,9 +103,17 @@ class Scorer:
         return scored
 
     def replayed(self, traj: Trajectory, name: str = "") -> tuple[TrajectoryScores, np.ndarray]:
-        """Replay one trajectory and score all but the learned scores; also its observations (for add_learned)."""
+        """Replay one trajectory and score all but the learned scores; also its observations (for add_learned).
+        A trajectory that stops before it succeeds and before the time limit is scored as if the trainee then held
+        the scope still until the limit (quitting is not finishing fast)."""
         tips = []
         obs, infos, rewards = replay(self.env, traj, lambda u: tips.append(u.state.tip_pos))
+        held = held_to_limit(traj, self.spec, len(obs)) if not infos[-1]["success"] else None
+        added = 0.0
+        if held is not None:
+            added = (len(held.time) - len(obs)) / self.spec.episode.control_hz
+            traj, tips = held, []
+            obs, infos, rewards = replay(self.env, traj, lambda u: tips.append(u.state.tip_pos))
         n = len(obs)
         time, tip = traj.time[:n] - traj.time[0], np.array(tips)
         last = infos[-1]
@@ -123,6 +131,7 @@ class Scorer:
             scores.update(tour_metrics(tip, [i["contacts"] for i in infos], self.anatomy, self.spec.scene.radius))
         meta = {
             **traj.meta,
+            **({"held_still_s": added} if added else {}),
             "success": bool(last["success"]),
             "subtasks_done": int(last["subtask"]),
             "subtasks_total": int(last["subtasks_total"]),
@@ -150,6 +159,23 @@ class Scorer:
     def replay_file(self, path: Path) -> tuple[TrajectoryScores, np.ndarray]:
         """Load, check and replay one file, all but the learned scores; also its observations."""
         return self.replayed(self.load_file(path), Path(path).stem)
+
+
+def held_to_limit(traj: Trajectory, spec: TaskSpec, replayed: int) -> Trajectory | None:
+    """The trajectory's first `replayed` samples, then its last pose held on the control grid up to the time limit
+    (None where it already reaches the limit)."""
+    hz = spec.episode.control_hz
+    total = round(spec.episode.time_limit * hz) + 1  # samples of a whole episode, the reset one included
+    if replayed >= total:
+        return None
+    n, extra = replayed, total - replayed
+
+    def hold(a: np.ndarray | None) -> np.ndarray | None:
+        """The first n rows, then the last of them repeated."""
+        return None if a is None else np.concatenate([a[:n], np.repeat(a[n - 1 : n], extra, axis=0)])
+
+    time = np.concatenate([traj.time[:n], traj.time[n - 1] + np.arange(1, extra + 1) / hz])
+    return Trajectory(time, hold(traj.portal), traj.meta, instruments=hold(traj.instruments), bodies=hold(traj.bodies))
 
 
 def learned_scores(networks, obs: np.ndarray) -> dict:
