@@ -6,10 +6,12 @@ from typer.testing import CliRunner
 
 import fastrl
 from fastrl.assess.kinematic import path_length
+from fastrl.assess.scoring import Scorer
 from fastrl.cli import app
 from fastrl.data import load_trajectories
-from fastrl.data.cohort import make_cohort
+from fastrl.data.cohort import make_cohort, with_overlays
 from fastrl.data.families import FAMILIES, draw_mix, family_names, mixed_profile
+from fastrl.data.replay import expert_trajectories
 from fastrl.data.skill import SkillProfile
 from fastrl.data.trainee import Trainee
 
@@ -53,12 +55,16 @@ def signs(env, profile: SkillProfile, seed: int) -> dict:
     }
 
 
+ACTED = [f for f in FAMILIES if FAMILIES[f].overlay is None]
+OVERLAID = [f for f in FAMILIES if FAMILIES[f].overlay is not None]
+
+
 @pytest.fixture(scope="module")
 def measured():
-    """The mean signs of the expert and of each family at novice severity, TraceLines seeds 0-2."""
+    """The mean signs of the expert and of each acted family at novice severity, TraceLines seeds 0-2."""
     env = fastrl.make(spec_file("tracelines"))
     out = {}
-    for name, profile in {"expert": SkillProfile(), **{f: FAMILIES[f].novice for f in FAMILIES}}.items():
+    for name, profile in {"expert": SkillProfile(), **{f: FAMILIES[f].novice for f in ACTED}}.items():
         rows = [signs(env, profile, seed) for seed in SEEDS]
         out[name] = {k: float(np.mean([r[k] for r in rows])) for k in rows[0]}
     return out
@@ -79,13 +85,47 @@ PRESENT = {
 
 
 def test_every_family_has_its_sign():
-    assert set(PRESENT) == set(FAMILIES)
+    assert set(PRESENT) == set(ACTED) and set(OVERLAID) == {"slowed", "jitter", "drift"}
 
 
-@pytest.mark.parametrize("family", list(FAMILIES))
+@pytest.mark.parametrize("family", ACTED)
 def test_family_deficit_is_present_in_its_trajectories(family, measured):
     f, e = measured[family], measured["expert"]
     assert PRESENT[family](f, e), (family, f, e)
+
+
+def band_power(q: np.ndarray, hz: float, lo: float, hi: float) -> float:
+    """Power of pitch and yaw inside [lo, hi] Hz."""
+    f = np.fft.rfftfreq(len(q), 1 / hz)
+    spectrum = np.abs(np.fft.rfft(q[:, :2] - q[:, :2].mean(0), axis=0)) ** 2
+    return float(spectrum[(f >= lo) & (f <= hi)].sum())
+
+
+@pytest.mark.parametrize("family", OVERLAID)
+def test_kinematic_overlay_deforms_the_recording_as_named(family):
+    spec = fastrl.make(spec_file("tracelines")).unwrapped.task_spec
+    scorer = Scorer(spec)
+    cohort = list(make_cohort(spec, 2, 1, seed=0, env=scorer.env, families=(family,)))
+    assert cohort[0].actions is None and cohort[0].meta["overlays"] == {FAMILIES[family].overlay: 1.0}
+    assert "overlays" not in cohort[1].meta and cohort[1].actions is not None  # the top level: the expert as acted
+    hz = spec.episode.control_hz
+    for seed, e in zip((0, 1), expert_trajectories(scorer.env, [0, 1])):
+        n = with_overlays(scorer.env, e, {FAMILIES[family].overlay: 1.0}, seed)
+        assert n.range_problem(scorer.env.task.ranges) is None and np.allclose(np.diff(n.time), 1 / hz)
+        if family == "slowed":  # the same path, later
+            assert (
+                len(n.time) > 1.5 * len(e.time)
+                and scorer.score(n).scores["time"] > 1.5 * scorer.score(e).scores["time"]
+            )
+            np.testing.assert_allclose(n.portal[-1], e.portal[-1])
+        elif family == "jitter":  # a shake in the tremor band
+            gap = n.portal[:, :2] - e.portal[:, :2]
+            assert np.sqrt((gap**2).mean()) > np.radians(0.5)
+            assert band_power(gap, hz, 3, 8) > 10 * band_power(gap, hz, 0, 2)
+        else:  # drift: slow deviations from the recorded path, not a shake
+            gap = n.portal[:, :2] - e.portal[:, :2]
+            assert np.sqrt((gap**2).mean()) > np.radians(1.0)
+            assert band_power(gap, hz, 0, 1) > 5 * band_power(gap, hz, 3, 10)
 
 
 def test_a_subject_mixes_families_in_shares_and_the_level_sets_the_total():

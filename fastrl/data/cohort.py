@@ -8,8 +8,9 @@ import numpy as np
 
 from ..env.fast_env import FastEnv
 from ..spec.models import TaskSpec
-from .families import draw_mix, mixed_profile
+from .families import draw_mix, mixed_profile, overlay_severities
 from .hands_trainee import TwoHandTrainee
+from .overlays import overlaid
 from .replay import replay, rollout_trajectory
 from .trainee import Trainee
 from .trajectory import Trajectory
@@ -47,7 +48,20 @@ def make_cohort(
                 "families": mix,
                 "profile": profile.as_dict(),
             }
-            yield rollout_trajectory(env, trainee.act, s, meta, trainee.reset)[0]
+            traj = rollout_trajectory(env, trainee.act, s, meta, trainee.reset)[0]
+            severities = overlay_severities(mix, level, levels)
+            yield with_overlays(env, traj, severities, s) if severities else traj
+
+
+def with_overlays(env: FastEnv, traj: Trajectory, severities: dict[str, float], seed: int) -> Trajectory:
+    """The trajectory's scope motion deformed by kinematic overlays, on the control grid, without its actions (they
+    no longer match); ValueError for a task with instruments or loose bodies (overlays deform the scope alone)."""
+    if traj.instruments is not None or traj.bodies is not None:
+        raise ValueError("kinematic overlay families (slowed, jitter, drift) deform the scope alone: not for this task")
+    hz = env.task_spec.episode.control_hz
+    portal = overlaid(traj.portal, severities, seed, hz, env.task.ranges)
+    meta = {**traj.meta, "overlays": severities}
+    return Trajectory(traj.time[0] + np.arange(len(portal)) / hz, portal, meta)
 
 
 def replayed_figures(env, traj: Trajectory) -> dict:

@@ -1,5 +1,6 @@
-"""Families of trainee deficits: each a direction in SkillProfile space at novice severity, named for what raters
-grade; a subject mixes the families of its cohort, the level setting the total severity."""
+"""Families of trainee deficits, named for what raters grade: most a direction in SkillProfile space at novice
+severity (how the trainee acts), three a kinematic overlay on what was recorded (fastrl.data.overlays); a subject
+mixes the families of its cohort, the level setting the total severity."""
 
 from __future__ import annotations
 
@@ -14,10 +15,12 @@ MOST_MIXED = 3  # a subject of a mixed cohort shows at most this many families
 
 @dataclass(frozen=True)
 class Family:
-    """One kind of deficit: its profile at novice severity and the rating items and kinematic signs it stands for."""
+    """One kind of deficit: its profile at novice severity (or the overlay it lays on the recording) and the rating
+    items and kinematic signs it stands for."""
 
     novice: SkillProfile
     grades: str
+    overlay: str | None = None  # a kinematic overlay of fastrl.data.overlays instead of a way of acting
 
 
 FAMILIES = {
@@ -43,6 +46,9 @@ FAMILIES = {
     "safety": Family(
         SkillProfile(bump=0.03), "OSATS respect for tissue, ASSET safety: the scope pushed in until it touches"
     ),
+    "slowed": Family(SkillProfile(), "OSATS time and motion: the same path at a slower, wandering speed", "slowed"),
+    "jitter": Family(SkillProfile(), "steadiness (tremor): 3-8 Hz shake on the recorded motion", "jitter"),
+    "drift": Family(SkillProfile(), "ASSET field of view: the view drifts slowly off, corrected late", "drift"),
 }
 
 
@@ -74,3 +80,9 @@ def mixed_profile(mix: dict[str, float], level: int, levels: int) -> SkillProfil
     for name, share in mix.items():
         profile = profile.plus(FAMILIES[name].novice.scaled(gap * share))
     return profile
+
+
+def overlay_severities(mix: dict[str, float], level: int, levels: int) -> dict[str, float]:
+    """The severity of each kinematic overlay in a subject's mix at a level (its share of the level's gap)."""
+    gap = skill_gap(level, levels)
+    return {FAMILIES[n].overlay: gap * share for n, share in mix.items() if FAMILIES[n].overlay and gap * share > 0}
