@@ -175,3 +175,14 @@ def test_mixed_cohort_labels_each_subject_with_its_mix(tmp_path):
     assert not problems and len(written) == 2 and all(set(t.meta["families"]) <= {"flow", "speed"} for t in written)
     bad = CliRunner().invoke(app, ["cohort", str(spec_file("tracelines")), "--families", "sloppy", "-o", str(tmp_path)])
     assert bad.exit_code == 2 and "Traceback" not in bad.output
+
+
+def test_two_handed_tasks_take_the_families_their_trainee_acts_out(tmp_path):
+    spec = fastrl.make(spec_file("triangulation")).unwrapped.task_spec
+    with pytest.raises(ValueError, match="deviates the scope alone"):
+        next(make_cohort(spec, 2, 1, families=("depth",)))
+    res = CliRunner().invoke(
+        app, ["cohort", str(spec_file("triangulation")), "--families", "all", "-o", str(tmp_path), "--no-progress"]
+    )
+    assert res.exit_code == 2 and "two-handed tasks take classic, flow, speed, corrections" in res.output
+    assert not list(tmp_path.glob("*.npz"))

@@ -50,14 +50,18 @@ def cohort(
     rows = []
     with Progress(disable=not progress) as bar:
         job = bar.add_task(f"cohort of {task.spec.name}", total=levels * per_level)
-        for traj in make_cohort(task.spec, levels, per_level, seed, env=env, families=mixed):
-            try:
-                traj.save(output / f"{traj.meta['subject']}.npz")
-            except OSError as e:
-                err.print(f"cannot write to {output}: {e.strerror or e}", markup=False)
-                raise typer.Exit(code=1) from None
-            rows.append({"skill": traj.meta["skill"], **replayed_figures(env, traj)})
-            bar.advance(job)
+        try:
+            for traj in make_cohort(task.spec, levels, per_level, seed, env=env, families=mixed):
+                try:
+                    traj.save(output / f"{traj.meta['subject']}.npz")
+                except OSError as e:
+                    err.print(f"cannot write to {output}: {e.strerror or e}", markup=False)
+                    raise typer.Exit(code=1) from None
+                rows.append({"skill": traj.meta["skill"], **replayed_figures(env, traj)})
+                bar.advance(job)
+        except ValueError as e:  # a family this task cannot show
+            err.print(f"{spec}: --families: {e}", markup=False)
+            raise typer.Exit(code=2) from None
     out.print(f"wrote {len(rows)} trajectories to {escape(str(output))}")
     print_levels(level_table(rows), task.spec.name)
 

@@ -52,6 +52,9 @@ FAMILIES = {
 }
 
 
+TWO_HANDED = ("classic", "flow", "speed", "corrections")  # what the two-handed trainee acts out (hands_trainee.py)
+
+
 def family_names(text: str) -> tuple[str, ...]:
     """Families named in a comma-separated list ('all': every one); ValueError names an unknown one."""
     names = tuple(FAMILIES) if text.strip() == "all" else tuple(n.strip() for n in text.split(",") if n.strip())
