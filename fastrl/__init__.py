@@ -3,16 +3,16 @@
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
     os.environ.setdefault("MUJOCO_GL", "egl")  # offscreen rendering on headless machines (before mujoco loads)
 
 import gymnasium  # noqa: E402
 
+from .bundled import SPECS_DIR, spec_path  # noqa: E402,F401 - public: the bundled specs as package data
+
 __version__ = "0.1.0"
 
-SPECS_DIR = Path(__file__).resolve().parent.parent / "specs"
 TASK_IDS = {
     "ImageCentring": "imagecentring",
     "Periscoping": "periscoping",
@@ -21,14 +21,6 @@ TASK_IDS = {
     "Triangulation": "triangulation",
     "LooseBodies": "loose_bodies",
 }
-
-
-def spec_path(name: str) -> Path:
-    """Path of a bundled spec by name (e.g. 'tracelines')."""
-    path = SPECS_DIR / f"{name}.yaml"
-    if not path.exists():
-        raise FileNotFoundError(f"no bundled spec '{name}' in {SPECS_DIR}")
-    return path
 
 
 def make(
@@ -43,10 +35,7 @@ def make(
         if overrides or sections:
             task_spec = TaskSpec.model_validate(_merge(apply_overrides(spec.model_dump(), list(overrides)), sections))
     else:
-        path = Path(spec)
-        if not path.exists() and not str(spec).endswith((".yaml", ".yml")):
-            path = spec_path(str(spec))
-        task_spec = load_spec(path, overrides)
+        task_spec = load_spec(spec, overrides)
         if sections:
             task_spec = TaskSpec.model_validate(_merge(task_spec.model_dump(), sections))
     return FastEnv(task_spec, render_mode=render_mode, width=width, height=height)
