@@ -9,9 +9,10 @@ if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
 
 import gymnasium  # noqa: E402
 
+from .about import DISTRIBUTION, VERSION  # noqa: E402,F401 - public: the name on PyPI, the version
 from .bundled import SPECS_DIR, spec_path  # noqa: E402,F401 - public: the bundled specs as package data
 
-__version__ = "0.1.0"
+__version__ = VERSION
 
 TASK_IDS = {
     "ImageCentring": "imagecentring",

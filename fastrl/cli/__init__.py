@@ -11,7 +11,7 @@ import typer.core
 from rich.console import Console
 from rich.markup import escape
 
-from .. import __version__
+from ..about import version_line
 from ..spec import SpecError, SpecIssue, json_schema, load_spec
 
 if TYPE_CHECKING:
@@ -105,7 +105,7 @@ def write_text(path: Path, text: str) -> None:
 
 def _version(value: bool) -> None:
     if value:
-        out.print(f"fastrl {__version__}", markup=False)
+        out.print(version_line(), markup=False)
         raise typer.Exit()
 
 
@@ -116,7 +116,7 @@ def _version(value: bool) -> None:
 def main(
     version: Annotated[
         bool,
-        typer.Option("--version", callback=_version, is_eager=True, help="print the version and exit"),
+        typer.Option("--version", callback=_version, is_eager=True, help="print the name on PyPI and the version"),
     ] = False,
 ) -> None:
     """FAST arthroscopy tasks: YAML specs compiled to MuJoCo, trained and scored as RL."""

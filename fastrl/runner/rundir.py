@@ -13,12 +13,13 @@ from pathlib import Path
 
 import yaml
 
+from ..about import DISTRIBUTION
 from ..agents.sb3 import checkpoint_problem
 from ..atomic import write_json, write_text
 from ..spec import spec_hash
 from ..spec.models import TaskSpec
 
-PACKAGES = ("fastrl", "mujoco", "gymnasium", "stable-baselines3", "torch", "numpy", "pydantic", "rerun-sdk")
+PACKAGES = (DISTRIBUTION, "mujoco", "gymnasium", "stable-baselines3", "torch", "numpy", "pydantic", "rerun-sdk")
 
 
 def new_run_dir(root: Path, spec: TaskSpec, label: str | None = None) -> Path:
