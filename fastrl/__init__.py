@@ -27,14 +27,15 @@ TASK_IDS = {
 def make(
     spec, *, render_mode: str | None = None, width: int = 128, height: int = 128, overrides: list[str] = (), **sections
 ):
-    """Build a FastEnv from a spec path, bundled spec name or TaskSpec; sections override spec fields."""
+    """Build a FastEnv from a spec path, bundled spec name, TaskSpec or its dict; sections override spec fields."""
     from .env import FastEnv
     from .spec import TaskSpec, apply_overrides, load_spec
 
-    if isinstance(spec, TaskSpec):
-        task_spec = spec
+    if isinstance(spec, TaskSpec | dict):  # a dict: a resolved spec as plain data (a Minari dataset's env_spec)
+        task_spec = spec if isinstance(spec, TaskSpec) else TaskSpec.model_validate(spec)
         if overrides or sections:
-            task_spec = TaskSpec.model_validate(_merge(apply_overrides(spec.model_dump(), list(overrides)), sections))
+            data = apply_overrides(task_spec.model_dump(), list(overrides))
+            task_spec = TaskSpec.model_validate(_merge(data, sections))
     else:
         task_spec = load_spec(spec, overrides)
         if sections:
