@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 import sys
@@ -73,3 +74,22 @@ def test_the_wheel_holds_every_bundled_spec(tmp_path):
     with zipfile.ZipFile(wheel) as z:
         held = {n.removeprefix("fastrl/specs/"): z.read(n) for n in z.namelist() if n.startswith("fastrl/specs/")}
     assert held == package_specs()
+
+
+def test_an_installed_copy_inside_another_repository_reports_no_commit(tmp_path):
+    """meta.json's git_commit is fastrl's source tree, never a repository a venv happens to sit in."""
+    site = tmp_path / "project" / ".venv" / "site-packages"
+    shutil.copytree(ROOT / "fastrl", site / "fastrl", ignore=shutil.ignore_patterns("__pycache__"))
+    git = ["git", "-c", "user.name=t", "-c", "user.email=t@t", "-C", str(tmp_path / "project")]
+    subprocess.run([*git, "init", "-q"], check=True)
+    subprocess.run([*git, "commit", "-q", "--allow-empty", "-m", "someone else's project"], check=True)
+    code = "from fastrl.runner.rundir import git_commit; print(git_commit())"
+    env = {**os.environ, "PYTHONPATH": str(site)}
+    proc = subprocess.run([sys.executable, "-c", code], env=env, cwd=site, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "None"
+    from fastrl.runner.rundir import git_commit
+
+    if (ROOT / ".git").exists():  # a checkout (not an unpacked sdist): its own commit
+        head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True)
+        assert git_commit().split("-")[0] == head.stdout.strip()
