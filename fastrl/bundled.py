@@ -24,9 +24,9 @@ def spec_path(name: str) -> Path:
 
 
 def find_spec(spec) -> Path:
-    """A spec file as given if it exists, else the bundled spec of that name, else the path as given."""
+    """The spec file as given if there is one (not a folder), else the bundled spec of that name, else the path."""
     path = Path(spec)
-    if os.path.lexists(path):
+    if os.path.lexists(path) and not path.is_dir():  # runs/ holds a folder per spec name: `fastrl run tracelines`
         return path
     try:
         return spec_path(str(spec))

@@ -55,8 +55,12 @@ def test_an_unknown_name_names_the_bundled_specs_without_a_traceback(tmp_path, m
     assert gym.make("fastrl/TraceLines-v0").unwrapped.task_spec.name == "tracelines"
 
 
-def test_a_file_of_a_bundled_name_in_the_working_folder_wins(tmp_path, monkeypatch):
+def test_a_file_of_a_bundled_name_in_the_working_folder_wins_a_folder_does_not(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
+    Path("imagecentring").mkdir()  # e.g. in runs/, where every spec has its folder
+    assert load_spec("imagecentring").name == "imagecentring"
+    with pytest.raises(SpecError, match="it is a folder"):
+        load_spec(tmp_path)
     text = (ROOT / "specs" / "tracelines.yaml").read_text()
     Path("tracelines").write_text(text.replace("time_limit: ", "time_limit: 1", 1))
     assert spec_hash(load_spec("tracelines")) != spec_hash(load_spec(fastrl.spec_path("tracelines")))
