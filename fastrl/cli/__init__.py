@@ -43,7 +43,8 @@ app = typer.Typer(
 out = Console(soft_wrap=True, emoji=False, highlight=False)
 err = Console(stderr=True, soft_wrap=True, emoji=False, highlight=False)
 
-SpecArg = Annotated[Path, typer.Argument(metavar="SPEC", help="task spec YAML", show_default=False)]
+SPEC_HELP = "task spec YAML, or a bundled spec's name (tracelines)"
+SpecArg = Annotated[Path, typer.Argument(metavar="SPEC", help=SPEC_HELP, show_default=False)]
 SetOpt = Annotated[
     list[str] | None,
     typer.Option(
@@ -201,7 +202,7 @@ RunsOpt = Annotated[Path, typer.Option("--runs", help="root folder of run direct
 
 @app.command()
 def run(
-    spec: Annotated[Path | None, typer.Argument(metavar="SPEC", help="task spec YAML", show_default=False)] = None,
+    spec: Annotated[Path | None, typer.Argument(metavar="SPEC", help=SPEC_HELP, show_default=False)] = None,
     set_: SetOpt = None,
     algo: Annotated[str | None, typer.Option(help="shortcut for --set train.algo=...")] = None,
     seed: Annotated[int | None, typer.Option(help="shortcut for --set train.seed=...")] = None,
