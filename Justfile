@@ -14,6 +14,10 @@ run spec=spec *args:
 test *args:
     MUJOCO_GL=egl python -m pytest {{args}}
 
+# build the wheel, install it in a fresh venv and use it from outside the checkout (CI runs it too)
+wheel-check:
+    bash .ci/wheel_check.sh
+
 # benchmarks: env throughput against raw mj_step
 bench:
     MUJOCO_GL=egl python bench/env_throughput.py

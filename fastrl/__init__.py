@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
     os.environ.setdefault("MUJOCO_GL", "egl")  # offscreen rendering on headless machines (before mujoco loads)
 
 import gymnasium  # noqa: E402
 
-__version__ = "0.1.0"
+from .about import DISTRIBUTION, VERSION  # noqa: E402,F401 - public: the name on PyPI, the version
+from .bundled import SPECS_DIR, spec_path  # noqa: E402,F401 - public: the bundled specs as package data
 
-SPECS_DIR = Path(__file__).resolve().parent.parent / "specs"
+__version__ = VERSION
+
 TASK_IDS = {
     "ImageCentring": "imagecentring",
     "Periscoping": "periscoping",
@@ -23,30 +24,20 @@ TASK_IDS = {
 }
 
 
-def spec_path(name: str) -> Path:
-    """Path of a bundled spec by name (e.g. 'tracelines')."""
-    path = SPECS_DIR / f"{name}.yaml"
-    if not path.exists():
-        raise FileNotFoundError(f"no bundled spec '{name}' in {SPECS_DIR}")
-    return path
-
-
 def make(
     spec, *, render_mode: str | None = None, width: int = 128, height: int = 128, overrides: list[str] = (), **sections
 ):
-    """Build a FastEnv from a spec path, bundled spec name or TaskSpec; sections override spec fields."""
+    """Build a FastEnv from a spec path, bundled spec name, TaskSpec or its dict; sections override spec fields."""
     from .env import FastEnv
     from .spec import TaskSpec, apply_overrides, load_spec
 
-    if isinstance(spec, TaskSpec):
-        task_spec = spec
+    if isinstance(spec, TaskSpec | dict):  # a dict: a resolved spec as plain data (a Minari dataset's env_spec)
+        task_spec = spec if isinstance(spec, TaskSpec) else TaskSpec.model_validate(spec)
         if overrides or sections:
-            task_spec = TaskSpec.model_validate(_merge(apply_overrides(spec.model_dump(), list(overrides)), sections))
+            data = apply_overrides(task_spec.model_dump(), list(overrides))
+            task_spec = TaskSpec.model_validate(_merge(data, sections))
     else:
-        path = Path(spec)
-        if not path.exists() and not str(spec).endswith((".yaml", ".yml")):
-            path = spec_path(str(spec))
-        task_spec = load_spec(path, overrides)
+        task_spec = load_spec(spec, overrides)
         if sections:
             task_spec = TaskSpec.model_validate(_merge(task_spec.model_dump(), sections))
     return FastEnv(task_spec, render_mode=render_mode, width=width, height=height)

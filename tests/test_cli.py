@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
+import tomllib
+from importlib import metadata
 from pathlib import Path
 
 import mujoco
@@ -29,10 +31,18 @@ def invoke(*args):
 
 
 def test_version():
-    """--version prints the package version."""
+    """--version prints pyproject's distribution name and version (the installed metadata's, where installed)."""
+    project = tomllib.loads((SPECS.parent / "pyproject.toml").read_text())["project"]
+    assert (fastrl.DISTRIBUTION, fastrl.__version__) == (project["name"], project["version"])
+    try:
+        installed = metadata.version(project["name"])
+    except metadata.PackageNotFoundError:  # a source tree on PYTHONPATH, or metadata under an older name
+        installed = None
     result = invoke("--version")
     assert result.exit_code == 0
-    assert result.stdout.strip() == f"fastrl {fastrl.__version__}"
+    name, version, rest = result.stdout.strip().split(" ", 2)
+    assert (name, version) == (project["name"], installed or project["version"])
+    assert rest.startswith("(import name fastrl") and ("without installed metadata" in rest) == (installed is None)
 
 
 def test_no_args_shows_help():

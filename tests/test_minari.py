@@ -79,3 +79,53 @@ def test_loose_bodies_round_trip_with_the_grasper_and_the_bodies(tmp_path):
     (ep,) = list(dataset.iterate_episodes())
     np.testing.assert_allclose(ep.observations, observations, atol=1e-6)  # replayed with both hands and the bodies
     assert ep.terminations[-1]  # every body ended in the cup on replay too
+
+
+def recovered_like(original, recovered, seed=3):
+    """Same spec, same spaces and the same first observation for the same seed."""
+    from fastrl.spec import spec_hash
+
+    assert spec_hash(recovered.unwrapped.task_spec) == spec_hash(original.unwrapped.task_spec)
+    assert recovered.observation_space == original.observation_space
+    assert recovered.action_space == original.action_space
+    np.testing.assert_array_equal(recovered.reset(seed=seed)[0], original.reset(seed=seed)[0])
+
+
+def test_a_dataset_recovers_its_env_through_minari(tmp_path, monkeypatch):
+    """The env_spec names the registered id and carries the spec, overrides included."""
+    import fastrl
+    from fastrl.agents.expert import ScriptedExpert
+    from fastrl.data.minari_io import export_minari
+    from fastrl.data.replay import rollout_trajectory
+
+    env = fastrl.make("tracelines", actions={"mode": "rates"})  # the bundled spec, not as bundled
+    expert = ScriptedExpert(env)
+    traj, _ = rollout_trajectory(env, expert.act, 0, {"source": "expert"}, expert.reset)
+    export_minari(env, [traj], tmp_path / "datasets", "fastrl/lines-rates-v0")
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "datasets"))
+    dataset = minari.load_dataset("fastrl/lines-rates-v0")
+    assert dataset.env_spec.id == "fastrl/TraceLines-v0" and dataset.env_spec.entry_point == "fastrl:make"
+    recovered = dataset.recover_environment()
+    assert recovered.unwrapped.task_spec.actions.mode == "rates"
+    recovered_like(env, recovered)
+    recovered_like(env, dataset.recover_environment(eval_env=True))
+
+
+def test_a_dataset_of_a_spec_file_recovers_after_the_file_is_gone(tmp_path, monkeypatch):
+    import fastrl
+
+    text = fastrl.spec_path("tracelines").read_text().replace("name: tracelines", "name: my_lines", 1)
+    spec = tmp_path / "mine.yaml"
+    spec.write_text(text.replace("time_limit: 30", "time_limit: 20", 1))
+    res = cli("demos", "--expert", spec, "-n", 1, "-o", tmp_path / "trajs", "--no-progress")
+    assert res.exit_code == 0, res.output
+    res = cli("export", tmp_path / "trajs", "--minari", tmp_path / "datasets", "--spec", spec)
+    assert res.exit_code == 0, res.output
+    original = fastrl.make(spec)
+    spec.unlink()
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "datasets"))
+    dataset = minari.load_dataset("fastrl/my_lines-v0")
+    assert dataset.env_spec.id == "fastrl/my_lines-v0"
+    recovered = dataset.recover_environment()
+    assert recovered.unwrapped.task_spec.episode.time_limit == 20
+    recovered_like(original, recovered)

@@ -11,7 +11,7 @@ import typer.core
 from rich.console import Console
 from rich.markup import escape
 
-from .. import __version__
+from ..about import version_line
 from ..spec import SpecError, SpecIssue, json_schema, load_spec
 
 if TYPE_CHECKING:
@@ -43,7 +43,8 @@ app = typer.Typer(
 out = Console(soft_wrap=True, emoji=False, highlight=False)
 err = Console(stderr=True, soft_wrap=True, emoji=False, highlight=False)
 
-SpecArg = Annotated[Path, typer.Argument(metavar="SPEC", help="task spec YAML", show_default=False)]
+SPEC_HELP = "task spec YAML, or a bundled spec's name (tracelines)"
+SpecArg = Annotated[Path, typer.Argument(metavar="SPEC", help=SPEC_HELP, show_default=False)]
 SetOpt = Annotated[
     list[str] | None,
     typer.Option(
@@ -105,7 +106,7 @@ def write_text(path: Path, text: str) -> None:
 
 def _version(value: bool) -> None:
     if value:
-        out.print(f"fastrl {__version__}", markup=False)
+        out.print(version_line(), markup=False)
         raise typer.Exit()
 
 
@@ -116,7 +117,7 @@ def _version(value: bool) -> None:
 def main(
     version: Annotated[
         bool,
-        typer.Option("--version", callback=_version, is_eager=True, help="print the version and exit"),
+        typer.Option("--version", callback=_version, is_eager=True, help="print the name on PyPI and the version"),
     ] = False,
 ) -> None:
     """FAST arthroscopy tasks: YAML specs compiled to MuJoCo, trained and scored as RL."""
@@ -201,7 +202,7 @@ RunsOpt = Annotated[Path, typer.Option("--runs", help="root folder of run direct
 
 @app.command()
 def run(
-    spec: Annotated[Path | None, typer.Argument(metavar="SPEC", help="task spec YAML", show_default=False)] = None,
+    spec: Annotated[Path | None, typer.Argument(metavar="SPEC", help=SPEC_HELP, show_default=False)] = None,
     set_: SetOpt = None,
     algo: Annotated[str | None, typer.Option(help="shortcut for --set train.algo=...")] = None,
     seed: Annotated[int | None, typer.Option(help="shortcut for --set train.seed=...")] = None,

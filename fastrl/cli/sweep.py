@@ -11,7 +11,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from ..spec import SpecError
-from . import SetOpt, app, err, exit_with, out
+from . import SPEC_HELP, SetOpt, app, err, exit_with, out
 
 
 def _fmt(mean, sd, pct: bool) -> str:
@@ -46,7 +46,7 @@ def print_results(summary: dict) -> None:
 
 @app.command()
 def sweep(
-    spec: Annotated[Path | None, typer.Argument(metavar="SPEC", help="task spec YAML", show_default=False)] = None,
+    spec: Annotated[Path | None, typer.Argument(metavar="SPEC", help=SPEC_HELP, show_default=False)] = None,
     grid: Annotated[
         list[str] | None,
         typer.Option(metavar="KEY=V1,V2", show_default=False, help="a spec field and its values (repeatable)"),

@@ -3,7 +3,8 @@
 An episode holds the observations and heuristic rewards recomputed by replay, the recorded actions, and in its infos
 the portal coordinates and times (and, where recorded, the instruments' coordinates and the loose bodies' poses,
 flattened per sample), so importing gives back the same trajectories; each episode's trajectory metadata is kept as
-JSON in the episode metadata under "fastrl".
+JSON in the episode metadata under "fastrl". The dataset's env_spec makes the very task it was replayed in
+(`minari.load_dataset(id).recover_environment()`), whether or not its spec is bundled.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..about import DISTRIBUTION, installed_version
 from .trajectory import Trajectory, TrajectoryError
 
 META_KEY = "fastrl"
@@ -71,6 +73,20 @@ def episode_buffer(env, traj: Trajectory, index: int):
     )
 
 
+def env_spec(task_spec):
+    """A Gymnasium EnvSpec of this very task: the id registered for its name, the resolved spec as plain kwargs.
+
+    `fastrl:make` takes the spec as a dict, so the env recovers without the spec file (a spec that is not bundled,
+    or a bundled one edited since); Minari stores the EnvSpec as JSON, which the plain dict survives.
+    """
+    from gymnasium.envs.registration import EnvSpec
+
+    from .. import TASK_IDS
+
+    task = {name: task for task, name in TASK_IDS.items()}.get(task_spec.name, task_spec.name)
+    return EnvSpec(f"fastrl/{task}-v0", entry_point="fastrl:make", kwargs={"spec": task_spec.model_dump(mode="json")})
+
+
 def export_minari(
     env, trajectories: list[Trajectory], root: Path, dataset_id: str, description: str | None = None
 ) -> Path:
@@ -83,17 +99,20 @@ def export_minari(
     if not trajectories:
         raise TrajectoryError("no trajectories to export")
     buffers = [episode_buffer(env, t, i) for i, t in enumerate(trajectories)]
+    version = installed_version()
     with _datasets_root(root), warnings.catch_warnings():
         warnings.filterwarnings("ignore", category=UserWarning, module="minari")  # advice on optional fields
         dataset = minari.create_dataset_from_buffers(
             dataset_id,
             buffers,
+            env=env_spec(env.unwrapped.task_spec),
             observation_space=env.observation_space,
             action_space=env.action_space,
             algorithm_name="fastrl replay of recorded trajectories",
             author="fastrl",
             description=description or f"{len(buffers)} trajectories of {env.unwrapped.task_spec.name}",
             data_format="arrow",
+            requirements=[f"{DISTRIBUTION}=={version}"] if version else None,
         )
         dataset.storage.update_episode_metadata([{META_KEY: json.dumps(t.meta)} for t in trajectories])
         return Path(dataset.storage.data_path).parent

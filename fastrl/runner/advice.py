@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from .. import SPECS_DIR
+from ..bundled import SPECS_DIR, find_spec
 from ..spec import SpecError, load_spec
 
 FAR_BELOW = 0.5  # the agent completes under half the expert's share of subtasks
@@ -42,7 +42,7 @@ def learning_advice(run: Path, spec_path: Path | None = None) -> str | None:
     if trained < budget:
         tips.append(f"train to the spec's budget, --timesteps {budget}")
     tuned = bundled_spec(spec.task.kind)
-    if tuned is not None and (spec_path is None or Path(spec_path).resolve() != tuned.resolve()):
+    if tuned is not None and (spec_path is None or find_spec(spec_path).resolve() != tuned.resolve()):
         tips.append(
             f"compare the train: and reward: sections with {tuned}, "
             f"tuned to learn in {load_spec(tuned).train.timesteps:,} timesteps"

@@ -13,12 +13,13 @@ from pathlib import Path
 
 import yaml
 
+from ..about import DISTRIBUTION
 from ..agents.sb3 import checkpoint_problem
 from ..atomic import write_json, write_text
 from ..spec import spec_hash
 from ..spec.models import TaskSpec
 
-PACKAGES = ("fastrl", "mujoco", "gymnasium", "stable-baselines3", "torch", "numpy", "pydantic", "rerun-sdk")
+PACKAGES = (DISTRIBUTION, "mujoco", "gymnasium", "stable-baselines3", "torch", "numpy", "pydantic", "rerun-sdk")
 
 
 def new_run_dir(root: Path, spec: TaskSpec, label: str | None = None) -> Path:
@@ -47,8 +48,10 @@ def write_spec(run: Path, spec: TaskSpec, xml: str) -> None:
 
 
 def git_commit() -> str | None:
-    """The source tree's git commit, with '-dirty' if it has uncommitted changes, or None."""
+    """The source tree's git commit, with '-dirty' if it has uncommitted changes, or None (installed from a wheel)."""
     root = Path(__file__).resolve().parents[2]
+    if not (root / "pyproject.toml").is_file():  # site-packages, maybe inside some other project's repository
+        return None
     try:
         head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, timeout=5)
         dirty = subprocess.run(

@@ -2,16 +2,21 @@
 
 import hashlib
 import json
+import os
 from pathlib import Path
 
+from ..bundled import find_spec, missing_spec_message
 from .defaults import canonical_dump, drop_unused_extensions
 from .loader import SpecError, SpecIssue, apply_overrides, load_model, read_yaml
 from .models import Avatar, Cue, DomeScene, Line, Portal, Scope, Task, TaskSpec
 
 
 def load_spec(path, overrides=()) -> TaskSpec:
-    """Load and validate a task spec YAML; raises SpecError listing every problem."""
-    return load_model(path, TaskSpec, list(overrides), context={"base": _folder(path)})
+    """Load and validate a task spec YAML file or bundled spec name; raises SpecError listing every problem."""
+    found = find_spec(path)
+    if not os.path.lexists(found):
+        raise SpecError([SpecIssue(str(path), None, "", missing_spec_message())])
+    return load_model(found, TaskSpec, list(overrides), context={"base": _folder(found)})
 
 
 def _folder(path) -> Path:
