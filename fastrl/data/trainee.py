@@ -53,7 +53,7 @@ class Trainee:
         self.overshot, self.subtask = set(), -1
         self.shaken = np.zeros(2)  # increments of pitch and yaw made by the tremor so far
         self.misjudged = np.zeros(5)  # the trainee's error in judging the goal (depth, aim, horizon)
-        self.waypoint = np.zeros(5)  # a wrong place headed for first (detour, bump), dropped once there
+        self.waypoint = np.zeros(5)  # a wrong place headed for first (a detour), dropped once there
         self.settled = 0  # steps spent at the perceived goal
         self.push = 0  # steps left of pushing the scope in (a bump)
         self.cycle, self.dither = np.full(2, -1.0), np.zeros(2)
