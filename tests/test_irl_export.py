@@ -1,7 +1,6 @@
 """Pickle-free export of IRL networks: the loaded policy, value and reward reproduce SB3 and the discriminator;
-safetensors files load without fastrl; an earlier version's .pt + .json pairs still load."""
+safetensors files load without fastrl."""
 
-import hashlib
 import json
 import re
 import shutil
@@ -48,17 +47,6 @@ def edit_header(d, name, edit) -> None:
     meta, tensors = read_header(path), load_file(str(path))
     edit(meta)
     save_file(tensors, str(path), metadata={"fastrl": json.dumps(meta)})
-
-
-def to_legacy(d) -> None:
-    """Turn each NAME.safetensors into the NAME.pt + NAME.json pair that fastrl wrote before safetensors."""
-    for path in sorted(d.glob("*.safetensors")):
-        pt, js = path.with_suffix(".pt"), path.with_suffix(".json")
-        meta = read_header(path)
-        torch.save(load_file(str(path)), pt)
-        meta |= {"weights": pt.name, "sha256": hashlib.sha256(pt.read_bytes()).hexdigest()}
-        js.write_text(json.dumps(meta, indent=2))
-        path.unlink()
 
 
 def raw_observations(spec, n: int, seed: int = 0) -> np.ndarray:
@@ -278,73 +266,6 @@ def test_without_absorbing_states_termination_adds_nothing(ppo_run, tmp_path):
     assert nets.learned_return(obs, True) == nets.learned_return(obs, False)
 
 
-class Payload:
-    """Code that a weights-only load must refuse to unpickle."""
-
-
-def _truncate(d):
-    data = (d / "policy.pt").read_bytes()
-    (d / "policy.pt").write_bytes(data[: len(data) // 2])
-
-
-def _rehash(d, name):
-    meta = json.loads((d / f"{name}.json").read_text())
-    meta["sha256"] = hashlib.sha256((d / f"{name}.pt").read_bytes()).hexdigest()
-    (d / f"{name}.json").write_text(json.dumps(meta))
-
-
-def _truncate_and_rehash(d):
-    _truncate(d)
-    _rehash(d, "policy")
-
-
-def _pickled_code(d):
-    torch.save({"value.0.weight": Payload()}, d / "value.pt")
-    _rehash(d, "value")
-
-
-def _edit_json(d, name, edit):
-    meta = json.loads((d / f"{name}.json").read_text())
-    edit(meta)
-    (d / f"{name}.json").write_text(json.dumps(meta))
-
-
-CORRUPTIONS = {
-    "truncated .pt": (_truncate, ValueError, "policy.pt"),
-    "truncated .pt, matching hash": (_truncate_and_rehash, ValueError, "policy.pt.*weights_only"),
-    "pickled code": (_pickled_code, ValueError, "value.pt.*weights_only"),
-    "missing obs_norm": (lambda d: _edit_json(d, "reward", lambda m: m.pop("obs_norm")), ValueError, "reward.json"),
-    "missing absorbing value": (
-        lambda d: _edit_json(d, "reward", lambda m: m.pop("absorbing_value")),
-        ValueError,
-        "reward.json.*absorbing_value",
-    ),
-    "missing layer width": (
-        lambda d: _edit_json(d, "policy", lambda m: m["parts"]["pi"][0].pop("in")),
-        ValueError,
-        "policy.json",
-    ),
-    "wrong layer width": (
-        lambda d: _edit_json(d, "value", lambda m: m["parts"]["v"][0].update({"in": 3})),
-        ValueError,
-        "value.json",
-    ),
-    "unknown output": (
-        lambda d: _edit_json(d, "policy", lambda m: m.update({"output": "sample"})),
-        ValueError,
-        "policy.json",
-    ),
-    "bad reward columns": (
-        lambda d: _edit_json(d, "reward", lambda m: m.update({"reward_inputs": [0, -1]})),
-        ValueError,
-        "reward.json.*reward_inputs",
-    ),
-    "not JSON": (lambda d: (d / "value.json").write_text("{oops"), ValueError, "value.json"),
-    "missing json": (lambda d: (d / "value.json").unlink(), FileNotFoundError, "value.json"),
-    "missing .pt": (lambda d: (d / "reward.pt").unlink(), FileNotFoundError, "reward.pt"),
-}
-
-
 @pytest.fixture(scope="module")
 def exported(ppo_run, tmp_path_factory):
     """A PPO + AIRL export to copy and corrupt."""
@@ -352,18 +273,6 @@ def exported(ppo_run, tmp_path_factory):
     out = tmp_path_factory.mktemp("exported")
     save_networks(out, model, venv, spectral_disc(obs.shape[1], "airl"), GAMMA)
     return out
-
-
-@pytest.mark.parametrize("name", list(CORRUPTIONS))
-def test_corrupted_legacy_files_raise_errors_naming_the_file(exported, tmp_path, name):
-    corrupt, error, match = CORRUPTIONS[name]
-    d = tmp_path / "nets"
-    shutil.copytree(exported, d)
-    to_legacy(d)
-    load_networks(d)  # the pristine copy loads
-    corrupt(d)
-    with pytest.raises(error, match=match):
-        load_networks(d)
 
 
 def _truncate_safetensors(d):
@@ -395,6 +304,21 @@ SAFETENSORS_CORRUPTIONS = {
         "reward.safetensors.*absorbing_value",
     ),
     "missing file": (lambda d: (d / "value.safetensors").unlink(), FileNotFoundError, "value.safetensors"),
+    "missing obs_norm": (
+        lambda d: edit_header(d, "reward", lambda m: m.pop("obs_norm")),
+        ValueError,
+        "reward.safetens",
+    ),
+    "unknown output": (
+        lambda d: edit_header(d, "policy", lambda m: m.update({"output": "sample"})),
+        ValueError,
+        "policy.safetensors",
+    ),
+    "bad reward columns": (
+        lambda d: edit_header(d, "reward", lambda m: m.update({"reward_inputs": [0, -1]})),
+        ValueError,
+        "reward.safetensors.*reward_inputs",
+    ),
 }
 
 
@@ -406,17 +330,6 @@ def test_corrupted_safetensors_raise_errors_naming_the_file(exported, tmp_path, 
     corrupt(d)
     with pytest.raises(error, match=match):
         load_networks(d)
-
-
-def test_an_earlier_versions_pt_and_json_pairs_load_to_the_same_networks(exported, ppo_run, tmp_path):
-    _, _, obs = ppo_run
-    d = tmp_path / "legacy"
-    shutil.copytree(exported, d)
-    to_legacy(d)
-    assert {p.suffix for p in d.iterdir()} == {".pt", ".json"}
-    new, old = load_networks(exported), load_networks(d)
-    for part in ("policy", "value", "reward", "potential"):  # the same tensors: equal up to float32 rounding
-        np.testing.assert_allclose(getattr(old, part)(obs), getattr(new, part)(obs), rtol=1e-6, atol=1e-7)
 
 
 def test_every_file_is_safetensors_with_its_description_in_the_header(exported):

@@ -201,8 +201,6 @@ def write_network(out_dir: Path, name: str, meta: dict, tensors: dict[str, torch
     own = {k: t.detach().cpu().contiguous().clone() for k, t in tensors.items()}  # safetensors refuses shared storage
     data = save_safetensors(own, metadata={HEADER_KEY: json.dumps(meta)})
     atomic_write(path, lambda f: f.write(data), needed=len(data))
-    for legacy in (out_dir / f"{name}.pt", out_dir / f"{name}.json"):  # an earlier version's pair, now superseded
-        legacy.unlink(missing_ok=True)
     return [path]
 
 
@@ -231,8 +229,7 @@ def save_networks(
             meta, tensors = meta | average_meta, tensors | average_tensors
         exports["reward"] = meta, tensors
     else:  # a stale reward from an earlier export would be loaded as this run's
-        for stale in (out_dir / "reward.safetensors", out_dir / "reward.json", out_dir / "reward.pt"):
-            stale.unlink(missing_ok=True)
+        (out_dir / "reward.safetensors").unlink(missing_ok=True)
     paths = []
     for name, (meta, tensors) in exports.items():
         meta = {**meta, "obs_dim": int(model.observation_space.shape[0]), "obs_norm": norm}

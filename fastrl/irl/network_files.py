@@ -6,5 +6,5 @@ from pathlib import Path
 
 
 def has_networks(directory: Path) -> bool:
-    """Whether a folder holds exported networks (a policy, in either file format)."""
-    return any((Path(directory) / f"policy.{ext}").is_file() for ext in ("safetensors", "json"))
+    """Whether a folder holds exported networks (a policy)."""
+    return (Path(directory) / "policy.safetensors").is_file()

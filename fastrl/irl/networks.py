@@ -1,5 +1,4 @@
-"""Load exported networks (NAME.safetensors, or an earlier version's NAME.json + NAME.pt) and evaluate them with
-plain torch."""
+"""Load exported networks (NAME.safetensors) and evaluate them with plain torch."""
 
 from __future__ import annotations
 
@@ -20,36 +19,6 @@ HEADER_KEY = "fastrl"  # the safetensors header metadata key holding the JSON de
 def file_sha256(path: Path) -> str:
     """Hex sha256 of a file's bytes."""
     return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _read_json(path: Path) -> dict:
-    """A JSON object, or a clear error naming the file."""
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: file not found")
-    try:
-        meta = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as e:
-        raise ValueError(f"{path}: not valid JSON ({e})") from e
-    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-        raise ValueError(f"{path}: not a {FORMAT} file")
-    return meta
-
-
-def _read_tensors(path: Path, sha256: str) -> dict[str, torch.Tensor]:
-    """A flat dict of tensors, loaded with weights_only=True after checking its sha256."""
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: file not found")
-    if file_sha256(path) != sha256:
-        raise ValueError(f"{path}: contents do not match the sha256 recorded in its JSON (corrupted or replaced)")
-    try:
-        tensors = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as e:  # truncated zip, or anything weights_only refuses to unpickle
-        raise ValueError(f"{path}: cannot load with weights_only=True ({e})") from e
-    if not isinstance(tensors, dict) or not all(
-        isinstance(k, str) and isinstance(v, torch.Tensor) for k, v in tensors.items()
-    ):
-        raise ValueError(f"{path}: not a flat dict of tensors")
-    return tensors
 
 
 @dataclass(frozen=True)
@@ -165,19 +134,11 @@ def _read_safetensors(path: Path) -> tuple[dict, dict[str, torch.Tensor]]:
 
 
 def read_pair(directory: Path, name: str) -> Loaded:
-    """NAME.safetensors (or an earlier version's NAME.json and NAME.pt), or FileNotFoundError/ValueError naming the
-    bad file."""
+    """NAME.safetensors, or FileNotFoundError/ValueError naming the bad file."""
     js = directory / f"{name}.safetensors"
-    if js.is_file():
-        meta, tensors = _read_safetensors(js)
-    else:
-        js = directory / f"{name}.json"
-        if not js.is_file() and not (directory / f"{name}.pt").is_file():  # else an earlier pair: name its JSON
-            raise FileNotFoundError(f"{directory / name}.safetensors: file not found")
-        meta = _read_json(js)
-        if not isinstance(meta.get("sha256"), str):
-            raise ValueError(f"{js}: missing key 'sha256'")
-        tensors = _read_tensors(directory / f"{name}.pt", meta["sha256"])
+    if not js.is_file():
+        raise FileNotFoundError(f"{js}: file not found")
+    meta, tensors = _read_safetensors(js)
     try:
         parts = {p: build_mlp(p, layers, tensors) for p, layers in meta["parts"].items()}
         return Loaded(js, meta, build_norm(meta, tensors), parts, tensors)
@@ -241,7 +202,7 @@ class Networks:
 
     def _read_reward(self) -> Loaded | None:
         """The reward pair, None if none was saved."""
-        if not any((self.directory / f"reward.{ext}").exists() for ext in ("safetensors", "json", "pt")):
+        if not (self.directory / "reward.safetensors").exists():
             return None
         loaded = read_pair(self.directory, "reward")
         loaded.variant("kind", {"airl": (), "gail": ()})
