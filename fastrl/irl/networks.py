@@ -331,5 +331,5 @@ class Networks:
 
 
 def load_networks(directory: Path, averaged: bool = True) -> Networks:
-    """The networks save_networks wrote into directory (safetensors, or json + torch.load(weights_only=True))."""
+    """The networks save_networks wrote into directory (safetensors)."""
     return Networks(Path(directory), averaged)
