@@ -43,9 +43,14 @@ def _av():
     return av
 
 
+def _text(error: Exception) -> str:
+    """An FFmpeg error's reason in one line, without its errno and file name."""
+    return " ".join(str(getattr(error, "strerror", None) or error).split()) or type(error).__name__
+
+
 def _fault(path: Path, error: Exception) -> str:
-    """One line for an FFmpeg error while reading a file."""
-    text = " ".join(str(getattr(error, "strerror", None) or error).split()) or type(error).__name__
+    """One line for an FFmpeg error while opening a file."""
+    text = _text(error)
     if "moov atom not found" in text or "Invalid data" in text:
         return f"{path}: not a readable video: corrupt or truncated ({text})"
     return f"{path}: not a readable video ({text})"
@@ -103,12 +108,14 @@ def read_video(path: Path, size: tuple[int, int] | None = None, exact_size: bool
                         "import it at a smaller size"
                     )
         except av.FFmpegError as e:
-            raise VideoError(f"{_fault(path, e)} after {len(frames)} frames") from None
+            raise VideoError(
+                f"{path}: corrupt or truncated: decoding failed after {len(frames)} frames ({_text(e)})"
+            ) from None
         declared = stream.frames
     if not frames:
         raise VideoError(f"{path}: no decodable frame in its video stream (corrupt or truncated)")
     if declared and len(frames) + dropped < declared:
-        raise VideoError(f"{path}: truncated or corrupt: {len(frames) + dropped} of the {declared} frames it declares")
+        raise VideoError(f"{path}: corrupt or truncated: {len(frames) + dropped} of the {declared} frames it declares")
     time = np.asarray(times) - times[0]
     fps = rate if rate else (len(time) - 1) / time[-1] if len(time) > 1 else 0.0
     codec = stream.codec_context.name
