@@ -177,3 +177,12 @@ def test_demos_write_a_video_beside_each_trajectory(tmp_path):
     npz, mp4 = sorted(tmp_path.glob("*.npz")), sorted(tmp_path.glob("*.mp4"))
     assert [p.stem for p in npz] == [p.stem for p in mp4]
     assert len(read_video(mp4[0]).time) == len(Trajectory.load(npz[0]).time)
+
+
+def test_cohort_writes_a_video_beside_each_trajectory(tmp_path):
+    short = ["--set", "episode.time_limit=2", "--set", "evaluate.image_size=[32,32]"]
+    code, output = run("cohort", SPEC, "--levels", 2, "--per-level", 1, "-o", tmp_path, "--video", *short)
+    assert code == 0, output
+    for npz in sorted(tmp_path.glob("*.npz")):
+        video = read_video(npz.with_suffix(".mp4"))
+        assert video.size == (32, 32) and len(video.time) == len(Trajectory.load(npz).time)

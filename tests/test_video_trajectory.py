@@ -80,3 +80,11 @@ def test_video_only_trajectory_is_refused_by_score_in_one_line(tmp_path):
     lines = [line for line in result.output.splitlines() if "v.npz" in line]
     assert len(lines) == 1 and "video only" in lines[0] and "portal coordinates" in lines[0]
     assert "Traceback" not in result.output
+
+
+def test_video_only_trajectory_is_refused_by_replay_command_naming_the_file(tmp_path):
+    Trajectory(np.arange(5) / 20, None, {"spec": "tracelines"}, frames=_frames(5)).save(tmp_path / "v.npz")
+    args = ["replay", str(tmp_path / "v.npz"), "--spec", str(spec_file("tracelines")), "--no-viewer"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2 and result.output.strip().count("\n") == 0
+    assert result.output.startswith(f"{tmp_path / 'v.npz'}: is video only")
