@@ -88,3 +88,41 @@ def test_video_only_trajectory_is_refused_by_replay_command_naming_the_file(tmp_
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 2 and result.output.strip().count("\n") == 0
     assert result.output.startswith(f"{tmp_path / 'v.npz'}: is video only")
+
+
+@pytest.mark.parametrize(
+    "frames, why",
+    [
+        (np.zeros((3, 4, 4, 3), np.float64), "frames must be uint8"),
+        (np.array([None, None, None], dtype=object), "pickle"),
+    ],
+)
+def test_hostile_frames_in_a_file_are_named(tmp_path, frames, why):
+    meta = np.array(json.dumps({}))
+    np.savez(tmp_path / "h.npz", time=np.arange(3) / 20, meta=meta, frames=frames, allow_pickle=True)
+    with pytest.raises(TrajectoryError, match=f"h.npz: .*{why}"):
+        Trajectory.load(tmp_path / "h.npz")
+
+
+def test_frames_declaring_a_huge_shape_are_refused_before_reading(tmp_path):
+    header = np.lib.format.header_data_from_array_1_0(np.zeros((1, 1, 1, 3), np.uint8))
+    header["shape"] = (100_000, 1024, 1024, 3)
+    with open(tmp_path / "frames.npy", "wb") as f:
+        np.lib.format.write_array_header_1_0(f, header)
+    import zipfile
+
+    with zipfile.ZipFile(tmp_path / "big.npz", "w") as z:
+        z.write(tmp_path / "frames.npy", "frames.npy")
+        z.writestr("time.npy", _npy(np.arange(3) / 20))
+        z.writestr("meta.npy", _npy(np.array(json.dumps({}))))
+    with pytest.raises(TrajectoryError, match="big.npz: frames declares shape"):
+        Trajectory.load(tmp_path / "big.npz")
+
+
+def _npy(a: np.ndarray) -> bytes:
+    """The .npy bytes of an array."""
+    import io
+
+    buffer = io.BytesIO()
+    np.save(buffer, a)
+    return buffer.getvalue()

@@ -20,7 +20,7 @@ from ..spec.models import TaskSpec
 VIDEO_SUFFIXES = (".mp4", ".m4v", ".mov", ".mkv", ".avi", ".webm")
 
 
-@dataclass
+@dataclass(kw_only=True)
 class Batch:
     """What a batch wrote (input, output), the inputs it skipped (one line each), frames and seconds taken."""
 
@@ -56,7 +56,7 @@ def _named(path: Path, error: Exception) -> str:
 class _Tasks:
     """One env per task, rendering at the chosen size; the spec is --spec, else the file's bundled spec name."""
 
-    def __init__(self, spec: TaskSpec | None, size: tuple[int, int] | None):
+    def __init__(self, *, spec: TaskSpec | None, size: tuple[int, int] | None):
         self.spec, self.size, self.envs = spec, size, {}
 
     def env_for(self, traj: Trajectory) -> FastEnv:
@@ -87,7 +87,7 @@ def render_videos(
     progress: bool = True,
 ) -> Batch:
     """Each trajectory's endoscope video as an mp4; unreadable or foreign files become messages, the rest render."""
-    tasks, batch, t0 = _Tasks(spec, size), Batch(), time.perf_counter()
+    tasks, batch, t0 = _Tasks(spec=spec, size=size), Batch(), time.perf_counter()
     with Progress(disable=not progress or len(files) < 2) as bar:
         job = bar.add_task("endoscope videos", total=len(files))
         for f in files:
