@@ -55,7 +55,7 @@ def _finish(batch, verb: str, unit: str) -> None:
 @app.command(name="render-video")
 def render_video(
     inputs: Annotated[
-        list[Path], typer.Argument(metavar="TRAJ...", help="trajectory .npz files or folders", show_default=False)
+        list[Path], typer.Argument(metavar="TRAJ", help="trajectory .npz files or folders", show_default=False)
     ],
     output: Annotated[
         Path | None, typer.Option("-o", "--output", help="FILE.mp4 for one trajectory, else a folder (default: beside)")
@@ -78,12 +78,19 @@ def render_video(
     if fps is not None and not 0 < fps <= 1000 or not 0 <= crf <= 51:
         err.print("--fps must be in (0, 1000] and --crf in [0, 51]", markup=False)
         raise typer.Exit(code=2)
+    if set_ and spec is None:
+        err.print("--set changes a spec: give it with --spec", markup=False)
+        raise typer.Exit(code=2)
     task = load_or_exit(spec, set_).spec if spec is not None else None
     batch = render_videos(files, output, spec=task, size=parse_size(size), fps=fps, crf=crf, progress=progress)
     if rrd is not None and batch.written:
         from ..log.video import write_video_recording
 
-        write_video_recording(rrd, [(mp4.stem, mp4) for _, mp4 in batch.written])
+        try:
+            write_video_recording(rrd, [(mp4.stem, mp4) for _, mp4 in batch.written])
+        except (OSError, RuntimeError, ValueError) as e:
+            err.print(f"cannot write {rrd}: {' '.join(str(e).split())}", markup=False)
+            raise typer.Exit(code=1) from None
         out.print(f"  recording: {escape(str(rrd))}")
     _finish(batch, "wrote", "videos")
 
@@ -91,7 +98,7 @@ def render_video(
 @app.command(name="import-video")
 def import_video_(
     inputs: Annotated[
-        list[Path], typer.Argument(metavar="FILE.mp4...", help="video files or folders of them", show_default=False)
+        list[Path], typer.Argument(metavar="VIDEO", help="video files (.mp4, ...) or folders", show_default=False)
     ],
     spec: Annotated[Path, typer.Option(metavar="SPEC", help="the task the videos show")],
     output: Annotated[

@@ -32,6 +32,7 @@ def write_video_recording(path: Path, videos: list[tuple[str, Path]], app_id: st
     skip_pandas_probe()
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    path.parent.mkdir(parents=True, exist_ok=True)
     rec = rr.RecordingStream(app_id)
     rec.set_log_time_enabled(False)
     rec.save(tmp)
