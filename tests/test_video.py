@@ -186,3 +186,19 @@ def test_cohort_writes_a_video_beside_each_trajectory(tmp_path):
     for npz in sorted(tmp_path.glob("*.npz")):
         video = read_video(npz.with_suffix(".mp4"))
         assert video.size == (32, 32) and len(video.time) == len(Trajectory.load(npz).time)
+
+
+def test_av1_renders_quietly_and_reads_back(expert, tmp_path, capfd):
+    _, path, frames = expert
+    rrd = tmp_path / "a.rrd"
+    code, output = run(
+        "render-video", path, "--size", f"{SIZE}x{SIZE}", "--codec", "av1", "-o", tmp_path / "a.mp4", "--rrd", rrd
+    )
+    assert code == 0, output
+    video = read_video(tmp_path / "a.mp4")
+    assert video.codec == "libdav1d" and len(video.time) == len(frames) and mae(video.frames, frames) < MAE
+    assert "Svt" not in capfd.readouterr().err  # the encoder's banner stays off the terminal
+    verify = subprocess.run(["rerun", "rrd", "verify", str(rrd)], capture_output=True, text=True)
+    assert verify.returncode == 0
+    code, output = run("render-video", path, "--codec", "av1", "--crf", 64, "-o", tmp_path / "b.mp4")
+    assert code == 2 and "--crf in [0, 63] for av1" in output and not (tmp_path / "b.mp4").exists()

@@ -65,24 +65,32 @@ def render_video(
     ] = None,
     size: SizeOpt = None,
     fps: Annotated[float | None, typer.Option(help="frames per second (default: the control rate)")] = None,
-    crf: Annotated[int, typer.Option(help="x264 quality: 0 best, 23 default, 51 worst")] = 23,
+    crf: Annotated[int, typer.Option(help="quality: 0 best, 23 default; worst 51 (h264), 63 (av1)")] = 23,
+    codec: Annotated[
+        str, typer.Option(help="h264, or av1 (Rerun's native viewer decodes it without an ffmpeg executable)")
+    ] = "h264",
     rrd: Annotated[Path | None, typer.Option(help="also write a Rerun recording of the videos")] = None,
     set_: SetOpt = None,
     progress: ProgressOpt = True,
 ) -> None:
     """Write the endoscope video (H.264 mp4) of trajectories: their frames, or their replay rendered."""
+    from ..data.video import CODECS
     from ..runner.video import expand, render_videos
 
     files = expand(inputs, (".npz",))
     _check_output(output, files, ".mp4")
-    if fps is not None and not 0 < fps <= 1000 or not 0 <= crf <= 51:
-        err.print("--fps must be in (0, 1000] and --crf in [0, 51]", markup=False)
+    if codec not in CODECS:
+        err.print(f"--codec must be one of {', '.join(CODECS)}, got {codec!r}", markup=False)
+        raise typer.Exit(code=2)
+    if fps is not None and not 0 < fps <= 1000 or not 0 <= crf <= CODECS[codec][1]:
+        err.print(f"--fps must be in (0, 1000] and --crf in [0, {CODECS[codec][1]}] for {codec}", markup=False)
         raise typer.Exit(code=2)
     if set_ and spec is None:
         err.print("--set changes a spec: give it with --spec", markup=False)
         raise typer.Exit(code=2)
     task = load_or_exit(spec, set_).spec if spec is not None else None
-    batch = render_videos(files, output, spec=task, size=parse_size(size), fps=fps, crf=crf, progress=progress)
+    sized = parse_size(size)
+    batch = render_videos(files, output, spec=task, size=sized, fps=fps, crf=crf, codec=codec, progress=progress)
     if rrd is not None and batch.written:
         from ..log.video import write_video_recording
 

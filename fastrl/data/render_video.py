@@ -40,11 +40,18 @@ def at_rate(time: np.ndarray, frames: np.ndarray, fps: float) -> np.ndarray:
 
 
 def write_trajectory_video(
-    env, traj: Trajectory, path: Path, *, fps: float | None = None, size: tuple[int, int] | None = None, crf: int = 23
+    env,
+    traj: Trajectory,
+    path: Path,
+    *,
+    fps: float | None = None,
+    size: tuple[int, int] | None = None,
+    crf: int = 23,
+    codec: str = "h264",
 ) -> tuple[Path, int]:
     """Write a trajectory's endoscope video (at `fps`, default the control rate; scaled to `size`) as an mp4;
     return the path and the number of frames."""
     time, frames = trajectory_frames(env, traj)
     fps = fps or env.unwrapped.task_spec.episode.control_hz
     frames = at_rate(time, frames, fps) if len(time) > 1 else frames
-    return write_video(path, frames, fps, crf=crf, size=size), len(frames)
+    return write_video(path, frames, fps, crf=crf, size=size, codec=codec), len(frames)

@@ -136,25 +136,45 @@ def _check_size(path: Path, have: tuple[int, int], want: tuple[int, int] | None,
         )
 
 
-def write_video(path: Path, frames: np.ndarray, fps: float, *, crf: int = 23, size: tuple[int, int] | None = None):
-    """Write (T, H, W, 3) uint8 frames as an H.264 (yuv420p) mp4 at `fps`, scaled to `size` (w, h) if given;
-    atomically. `crf`: x264's constant rate factor (0 lossless luma, 23 its default, 51 worst)."""
+# codec: (encoder, largest crf, encoder options); one thread each, so the same frames give the same bytes
+CODECS = {
+    "h264": ("libx264", 51, {"bf": "0", "threads": "1"}),  # no B-frames
+    "av1": ("libsvtav1", 63, {"preset": "8", "svtav1-params": "lp=1:pred-struct=1"}),  # low delay: no reordering
+}
+
+
+def write_video(
+    path: Path,
+    frames: np.ndarray,
+    fps: float,
+    *,
+    crf: int = 23,
+    size: tuple[int, int] | None = None,
+    codec: str = "h264",
+) -> Path:
+    """Write (T, H, W, 3) uint8 frames as an mp4 (yuv420p; H.264 by x264 or AV1 by SVT-AV1) at `fps`, scaled to
+    `size` (w, h) if given; atomically. `crf`: the constant rate factor (x264: 0 lossless luma, 23 its default, 51
+    worst; SVT-AV1: up to 63)."""
     av, path = _av(), Path(path)
     frames = np.asarray(frames)
     if frames.dtype != np.uint8 or frames.ndim != 4 or frames.shape[3] != 3 or not len(frames):
         raise VideoError(f"{path}: frames must be (T, H, W, 3) uint8 with T >= 1, got {frames.dtype} {frames.shape}")
+    if codec not in CODECS:
+        raise VideoError(f"{path}: codec must be one of {', '.join(CODECS)}, got {codec!r}")
+    encoder, worst, options = CODECS[codec]
     w, h = size or (frames.shape[2], frames.shape[1])
     if w % 2 or h % 2 or w < 2 or h < 2:
-        raise VideoError(f"{path}: H.264 in yuv420p needs an even width and height, got {w}x{h}")
-    if not (0 < fps <= 1000 and 0 <= crf <= 51):
-        raise VideoError(f"{path}: fps must be in (0, 1000] and crf in [0, 51], got {fps:g} and {crf}")
+        raise VideoError(f"{path}: yuv420p video needs an even width and height, got {w}x{h}")
+    if not (0 < fps <= 1000 and 0 <= crf <= worst):
+        raise VideoError(f"{path}: fps must be in (0, 1000] and crf in [0, {worst}], got {fps:g} and {crf}")
     rate = Fraction(fps).limit_denominator(1001)
+    os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1 prints its banner to stderr unless told: errors only
 
     def encode(f) -> None:
         with av.open(f, mode="w", format="mp4") as container:
-            stream = container.add_stream("libx264", rate=rate)
+            stream = container.add_stream(encoder, rate=rate)
             stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
-            stream.codec_context.options = {"crf": str(crf), "bf": "0", "threads": "1"}
+            stream.codec_context.options = {"crf": str(crf), **options}
             stream.codec_context.thread_count = 1
             for i, rgb in enumerate(frames):
                 frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(rgb), format="rgb24")
@@ -165,4 +185,7 @@ def write_video(path: Path, frames: np.ndarray, fps: float, *, crf: int = 23, si
             container.mux(stream.encode(None))
 
     path.parent.mkdir(parents=True, exist_ok=True)
-    return atomic_write(path, encode)
+    try:
+        return atomic_write(path, encode)
+    except av.FFmpegError as e:
+        raise VideoError(f"{path}: the {codec} encoder refused these frames ({_text(e)})") from None

@@ -84,6 +84,7 @@ def render_videos(
     size: tuple[int, int] | None = None,
     fps: float | None = None,
     crf: int = 23,
+    codec: str = "h264",
     progress: bool = True,
 ) -> Batch:
     """Each trajectory's endoscope video as an mp4; unreadable or foreign files become messages, the rest render."""
@@ -96,7 +97,7 @@ def render_videos(
                 env = tasks.env_for(traj)
                 out = target(f, output, ".mp4", len(files) == 1)
                 scale = size if traj.frames is not None else None
-                path, n = write_trajectory_video(env, traj, out, fps=fps, size=scale, crf=crf)
+                path, n = write_trajectory_video(env, traj, out, fps=fps, size=scale, crf=crf, codec=codec)
                 batch.written.append((f, path))
                 batch.frames += n
             except (TrajectoryError, VideoError, SpecError, ValueError) as e:
