@@ -73,10 +73,15 @@ def test_video_only_trajectory_is_refused_by_replay():
         replay(env, t)
 
 
-def test_video_only_trajectory_is_refused_by_score_in_one_line(tmp_path):
+def test_video_only_trajectory_is_refused_by_score_in_one_line_the_rest_scored(tmp_path):
     Trajectory(np.arange(5) / 20, None, {"spec": "tracelines"}, frames=_frames(5)).save(tmp_path / "v.npz")
-    result = CliRunner().invoke(app, ["score", "--spec", str(spec_file("tracelines")), str(tmp_path / "v.npz")])
-    assert result.exit_code == 2
+    env = fastrl.make(spec_file("tracelines"))
+    env.reset(seed=0)
+    q = env.unwrapped.portal_coordinates()  # the scope held still where the episode starts
+    Trajectory(np.arange(5) / 20, np.tile(q, (5, 1)), {"spec": "tracelines"}).save(tmp_path / "kinematic.npz")
+    args = ["score", "--spec", str(spec_file("tracelines")), str(tmp_path), "--references", "1", "--no-pictures"]
+    result = CliRunner().invoke(app, [*args, "-o", str(tmp_path / "out" / "scores.json"), "--no-progress"])
+    assert result.exit_code == 0 and "scored 1 trajectories" in result.output and "1 skipped" in result.output
     lines = [line for line in result.output.splitlines() if "v.npz" in line]
     assert len(lines) == 1 and "video only" in lines[0] and "portal coordinates" in lines[0]
     assert "Traceback" not in result.output
