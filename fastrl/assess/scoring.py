@@ -10,7 +10,7 @@ from scipy.spatial import cKDTree
 
 from ..data.inverse import to_control_rate
 from ..data.replay import replay
-from ..data.trajectory import Trajectory, TrajectoryError
+from ..data.trajectory import VIDEO_ONLY, Trajectory, TrajectoryError
 from ..env.fast_env import FastEnv
 from ..model.kinematics import Kinematics
 from ..spec import task_hash
@@ -147,7 +147,7 @@ class Scorer:
         """Load and check one file, resampled to the control rate if it is off that grid; TrajectoryError or
         ValueError name the file and the problem."""
         traj = Trajectory.load(path)
-        problem = foreign_problem(traj, self.spec)
+        problem = foreign_problem(traj, self.spec) or (VIDEO_ONLY if traj.portal is None else None)
         if problem:
             raise TrajectoryError(f"{path}: {problem}")
         return to_control_rate(traj, self.spec.episode.control_hz)

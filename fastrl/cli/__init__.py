@@ -183,6 +183,9 @@ def demos(
     output: Annotated[Path, typer.Option("-o", "--output", help="folder for the .npz files")] = Path("demos"),
     seed: Annotated[int, typer.Option(help="seed of the first episode")] = 0,
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
+    video: Annotated[
+        bool, typer.Option("--video", help="also write each one's endoscope video (.mp4) beside it")
+    ] = False,
 ) -> None:
     """Write demonstrations (trajectory .npz files) from a trained run or the scripted expert."""
     from ..runner.demos import write_demos
@@ -191,7 +194,7 @@ def demos(
         err.print("give RUN_DIR, or --expert SPEC", markup=False)
         raise typer.Exit(code=2)
     try:
-        paths = write_demos(output, n, seed, run=source, expert_spec=expert, progress=progress)
+        paths = write_demos(output, n, seed, run=source, expert_spec=expert, progress=progress, video=video)
     except (SpecError, FileNotFoundError) as e:
         exit_with(e)
     out.print(f"wrote {len(paths)} trajectories to {escape(str(output))}")
@@ -369,4 +372,4 @@ def view(
 
 
 # commands in their own modules register themselves on `app`
-from . import assess, cohort, datasets, poses, run_list, score, stops, sweep, trainee  # noqa: E402,F401
+from . import assess, cohort, datasets, poses, run_list, score, stops, sweep, trainee, videos  # noqa: E402,F401

@@ -24,12 +24,17 @@ def cohort(
     ] = "classic",
     set_: SetOpt = None,
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
+    video: Annotated[
+        bool, typer.Option("--video", help="also write each one's endoscope video (.mp4) beside it")
+    ] = False,
 ) -> None:
     """Write a synthetic trainee cohort (DIR/<subject>.npz) and print its figures by skill level."""
     from rich.progress import Progress
 
     from ..data.cohort import level_table, make_cohort, replayed_figures
     from ..data.families import family_names
+    from ..data.render_video import write_trajectory_video
+    from ..data.video_import import endoscope_size
     from ..env.fast_env import FastEnv
 
     if levels < 2 or per_level < 1:
@@ -46,14 +51,17 @@ def cohort(
             f"{spec}: synthetic trainees act with discrete actions; use --set actions.mode=discrete", markup=False
         )
         raise typer.Exit(code=2)
-    env = FastEnv(task.spec)
+    w, h = endoscope_size(task.spec)
+    env = FastEnv(task.spec, width=w, height=h)
     rows = []
     with Progress(disable=not progress) as bar:
         job = bar.add_task(f"cohort of {task.spec.name}", total=levels * per_level)
         try:
             for traj in make_cohort(task.spec, levels, per_level, seed, env=env, families=mixed):
                 try:
-                    traj.save(output / f"{traj.meta['subject']}.npz")
+                    path = traj.save(output / f"{traj.meta['subject']}.npz")
+                    if video:
+                        write_trajectory_video(env, traj, path.with_suffix(".mp4"))
                 except OSError as e:
                     err.print(f"cannot write to {output}: {e.strerror or e}", markup=False)
                     raise typer.Exit(code=1) from None

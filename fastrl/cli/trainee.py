@@ -105,7 +105,7 @@ def replay(
             feedback_md=markdown_feedback(fb) if fb else None,
         )
     except (SpecError, TrajectoryError, FileNotFoundError, ValueError) as e:
-        exit_with(e)
+        exit_with(named(file, e))
     out.print(f"rerun: {escape(str(rrd))}")
     if viewer:
         try:
@@ -145,5 +145,14 @@ def assist_cmd(
             task_spec, traj, output or file.with_suffix(".assist.rrd"), run, every_s=every, feedback_md=text
         )
     except (SpecError, TrajectoryError, FileNotFoundError, ValueError) as e:
-        exit_with(e)
+        exit_with(named(file, e))
     out.print(f"rerun: {escape(str(rrd))}")
+
+
+def named(file: Path, error: Exception) -> Exception:
+    """A trajectory problem with the file named in front (as in batches); other errors as they are."""
+    from ..data.trajectory import TrajectoryError
+
+    if isinstance(error, TrajectoryError) and not str(error).startswith(str(file)):
+        return TrajectoryError(f"{file}: {error}")
+    return error

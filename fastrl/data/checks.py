@@ -24,6 +24,7 @@ from ..spec.limits import (
 
 COORDINATES = ("pitch", "yaw", "insertion", "roll", "cable")  # rad, rad, m, rad, rad
 UNITS = ("rad", "rad", "m", "rad", "rad")
+ARRAYS = ("time", "portal", "actions", "meta", "instruments", "bodies", "frames")  # the arrays a trajectory reads
 
 
 def real_array(value, name: str) -> np.ndarray:
@@ -34,6 +35,16 @@ def real_array(value, name: str) -> np.ndarray:
     if a.shape and a.shape[0] > MAX_TRAJECTORY_SAMPLES:
         raise ValueError(f"{name} has {a.shape[0]:,} rows, at most {MAX_TRAJECTORY_SAMPLES:,} are allowed")
     return a.astype(float, copy=False)
+
+
+def frames_array(value) -> np.ndarray:
+    """Video frames as a uint8 array; ValueError unless they are uint8 with at most MAX_TRAJECTORY_SAMPLES rows."""
+    a = np.asarray(value)
+    if a.dtype != np.uint8:
+        raise ValueError(f"frames must be uint8 (0-255 RGB), got dtype {a.dtype}")
+    if a.shape and a.shape[0] > MAX_TRAJECTORY_SAMPLES:
+        raise ValueError(f"frames has {a.shape[0]:,} rows, at most {MAX_TRAJECTORY_SAMPLES:,} are allowed")
+    return a
 
 
 def time_problem(time: np.ndarray) -> str | None:
@@ -104,7 +115,7 @@ def npz_members(fh: BinaryIO) -> None:
         if total > MAX_TRAJECTORY_BYTES:
             raise ValueError(f"its arrays decompress to {total:,} bytes, at most {MAX_TRAJECTORY_BYTES:,} are read")
         for info in infos:
-            if info.filename.removesuffix(".npy") in ("time", "portal", "actions", "meta", "instruments", "bodies"):
+            if info.filename.removesuffix(".npy") in ARRAYS:
                 _npy_header(zf, info)
     fh.seek(0)
 

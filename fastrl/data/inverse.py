@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from .frames import control_grid, nearest_rows
 from .poses import resample, resample_bodies, resample_columns
 from .trajectory import Trajectory
 
@@ -35,16 +36,20 @@ def on_control_grid(traj: Trajectory, hz: float) -> bool:
 
 def to_control_rate(traj: Trajectory, hz: float) -> Trajectory:
     """The trajectory on the control grid t0 + k / hz, interpolated linearly with roll and cable unwrapped (the
-    rule of `fastrl import-poses`), other instruments and free bodies with it; its actions are dropped, since they
-    belonged to the old samples."""
+    rule of `fastrl import-poses`), other instruments and free bodies with it, video frames by the nearest frame
+    in time (ties: the earlier); its actions are dropped, since they belonged to the old samples."""
     if on_control_grid(traj, hz):
         return traj
-    time, portal = resample(traj.time, traj.portal, hz)
+    if traj.portal is None:
+        time, portal = control_grid(traj.time, hz), None
+    else:
+        time, portal = resample(traj.time, traj.portal, hz)
     if len(time) < 2:
         raise ValueError(f"shorter than one control step (1/{hz:g} s): cannot be resampled")
     meta = {**traj.meta, "resampled_from": len(traj.time)}
     instruments = resample_columns(time, traj.time, traj.instruments)
-    return Trajectory(time, portal, meta, instruments=instruments, bodies=resample_bodies(time, traj.time, traj.bodies))
+    bodies, frames = resample_bodies(time, traj.time, traj.bodies), nearest_rows(time, traj.time, traj.frames)
+    return Trajectory(time, portal, meta, instruments=instruments, bodies=bodies, frames=frames)
 
 
 @dataclass

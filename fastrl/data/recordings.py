@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .inverse import ActionRecovery, on_control_grid, to_control_rate
-from .trajectory import Trajectory, TrajectoryError, load_files
+from .trajectory import VIDEO_ONLY, Trajectory, TrajectoryError, load_files
 
 METHOD = {
     "discrete": "exact search over every discrete action",
@@ -72,6 +72,8 @@ def with_actions(env, named: list[tuple[str, Trajectory]]) -> Prepared:
     out = Prepared()
     for name, traj in named:
         try:
+            if traj.portal is None:
+                raise TrajectoryError(VIDEO_ONLY)
             if not on_control_grid(traj, hz):
                 traj = to_control_rate(traj, hz)
                 out.resampled += 1
