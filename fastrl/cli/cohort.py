@@ -32,7 +32,7 @@ def cohort(
     from rich.progress import Progress
 
     from ..data.cohort import level_table, make_cohort, replayed_figures
-    from ..data.families import family_names
+    from ..data.families import family_names, foreign_family
     from ..data.render_video import write_trajectory_video
     from ..data.video_import import endoscope_size
     from ..env.fast_env import FastEnv
@@ -53,23 +53,23 @@ def cohort(
         raise typer.Exit(code=2)
     w, h = endoscope_size(task.spec)
     env = FastEnv(task.spec, width=w, height=h)
+    problem = foreign_family(mixed, bool(env.task.instruments))
+    if problem:
+        err.print(f"{spec}: --families: {problem}", markup=False)
+        raise typer.Exit(code=2)
     rows = []
     with Progress(disable=not progress) as bar:
         job = bar.add_task(f"cohort of {task.spec.name}", total=levels * per_level)
-        try:
-            for traj in make_cohort(task.spec, levels, per_level, seed, env=env, families=mixed):
-                try:
-                    path = traj.save(output / f"{traj.meta['subject']}.npz")
-                    if video:
-                        write_trajectory_video(env, traj, path.with_suffix(".mp4"))
-                except OSError as e:
-                    err.print(f"cannot write to {output}: {e.strerror or e}", markup=False)
-                    raise typer.Exit(code=1) from None
-                rows.append({"skill": traj.meta["skill"], **replayed_figures(env, traj)})
-                bar.advance(job)
-        except ValueError as e:  # a family this task cannot show
-            err.print(f"{spec}: --families: {e}", markup=False)
-            raise typer.Exit(code=2) from None
+        for traj in make_cohort(task.spec, levels, per_level, seed, env=env, families=mixed):
+            try:
+                path = traj.save(output / f"{traj.meta['subject']}.npz")
+                if video:
+                    write_trajectory_video(env, traj, path.with_suffix(".mp4"))
+            except OSError as e:
+                err.print(f"cannot write to {output}: {e.strerror or e}", markup=False)
+                raise typer.Exit(code=1) from None
+            rows.append({"skill": traj.meta["skill"], **replayed_figures(env, traj)})
+            bar.advance(job)
     out.print(f"wrote {len(rows)} trajectories to {escape(str(output))}")
     print_levels(level_table(rows), task.spec.name)
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..env.fast_env import FastEnv
 from ..spec.models import TaskSpec
-from .families import TWO_HANDED, draw_mix, mixed_profile, overlay_severities
+from .families import draw_mix, foreign_family, mixed_profile, overlay_severities
 from .hands_trainee import TwoHandTrainee
 from .overlays import overlaid
 from .replay import replay, rollout_trajectory
@@ -34,9 +34,9 @@ def make_cohort(
     if per_level < 1:
         raise ValueError(f"per_level must be at least 1, got {per_level}")
     env = env or FastEnv(spec)
-    foreign = [f for f in families if env.task.instruments and f not in TWO_HANDED]
-    if foreign:
-        raise ValueError(f"family {foreign[0]} deviates the scope alone; two-handed tasks take {', '.join(TWO_HANDED)}")
+    problem = foreign_family(families, bool(env.task.instruments))
+    if problem:
+        raise ValueError(problem)
     for level in range(1, levels + 1):
         for i in range(per_level):
             s = seed + (level - 1) * per_level + i

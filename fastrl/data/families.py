@@ -66,6 +66,14 @@ def family_names(text: str) -> tuple[str, ...]:
     return names
 
 
+def foreign_family(families: tuple[str, ...], two_handed: bool) -> str | None:
+    """Why a task cannot show these families (None: it can): scope-only deviations on a two-handed task."""
+    foreign = [f for f in families if two_handed and f not in TWO_HANDED]
+    if foreign:
+        return f"family {foreign[0]} deviates the scope alone; two-handed tasks take {', '.join(TWO_HANDED)}"
+    return None
+
+
 def draw_mix(families: tuple[str, ...], seed: int) -> dict[str, float]:
     """A subject's share of each family (summing to 1): one family alone, or up to MOST_MIXED with random weights."""
     if len(families) == 1:
