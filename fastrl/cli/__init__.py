@@ -258,6 +258,7 @@ def train_and_report(
     from ..agents.sb3 import CheckpointDamaged, CheckpointMismatch
     from ..atomic import DiskFull
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace, resume_run, start_run
+    from ..runner.runfiles import RunFileError, read_eval
     from .stops import report_stop
 
     try:
@@ -275,9 +276,9 @@ def train_and_report(
             run_dir = start_run(spec, overrides, runs, out, progress)
     except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
         report_stop(stop)
-    except (SpecError, FileNotFoundError, CheckpointMismatch, CheckpointDamaged) as e:
+    except (SpecError, FileNotFoundError, CheckpointMismatch, CheckpointDamaged, RunFileError) as e:
         exit_with(e)
-    results = json.loads((run_dir / "eval.json").read_text())
+    results = read_eval(run_dir)
     print_eval(results)
     from ..runner.advice import learning_advice
 
@@ -318,11 +319,14 @@ def eval_(
 ) -> None:
     """Re-evaluate a saved run (deterministic episodes), or the scripted expert on a spec."""
     from ..runner import EvaluationInterrupted, evaluate_expert, evaluate_saved
+    from .runcheck import check_run
     from .stops import stop_code
 
     if (run_dir is None) == (expert is None):
         err.print("give RUN_DIR, or --expert SPEC", markup=False)
         raise typer.Exit(code=2)
+    if run_dir is not None:
+        check_run(run_dir, {"spec.yaml"})
     try:
         results = evaluate_saved(run_dir, episodes) if run_dir else evaluate_expert(expert, (), episodes)
     except EvaluationInterrupted as stop:
@@ -352,10 +356,20 @@ def view(
 
         return view_web(run_dir, port)
 
+    from .runcheck import check_run
+
     rrd = run_dir / "recording.rrd" if run_dir.is_dir() else run_dir
     if not rrd.exists():
         err.print(f"no recording at {rrd}", markup=False)
         raise typer.Exit(code=2)
+    if run_dir.is_dir():
+        check_run(run_dir, {"recording.rrd"})
+    else:
+        from ..runner.runfiles import recording_fault
+
+        if fault := recording_fault(rrd):
+            err.print(f"{rrd}: {fault}; mend it with: fastrl repair {rrd.parent}", markup=False)
+            raise typer.Exit(code=2)
     viewer = shutil.which("rerun")
     if viewer and (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         subprocess.Popen([viewer, str(rrd)])

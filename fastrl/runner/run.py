@@ -24,6 +24,7 @@ from .evaluate import evaluate, evaluate_batched
 from .learner import build_learner
 from .monitor import TrainingMonitor
 from .rundir import clean_leftovers, latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
+from .runfiles import read_run_spec, read_state, require
 from .saved import load_policy
 from .stops import (
     EvaluationInterrupted,
@@ -60,12 +61,21 @@ def start_run(
 
 
 def resume_run(run: Path, console: Console | None = None, progress: bool = True, timesteps: int | None = None) -> Path:
-    """Continue a run from its newest whole checkpoint (naming damaged ones) to its budget; evaluate and record."""
+    """Continue a run from its newest whole checkpoint (naming damaged ones) to its budget; evaluate and record.
+
+    A damaged spec.yaml or meta.json raises RunFileError before anything is written."""
     run = Path(run)
     console = console or Console()
-    if not (run / "spec.yaml").exists():
-        raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
-    spec = load_spec(run / "spec.yaml", [f"train.timesteps={timesteps}"] if timesteps else [])
+    spec = read_run_spec(run, [f"train.timesteps={timesteps}"] if timesteps else [])
+    for problem in require(run, {"spec.yaml", "meta.json"}):
+        if problem.path.parent.name == "checkpoints":
+            continue  # named below, as resume passes over it
+        then = (
+            "resuming keeps it aside and rewrites it"
+            if problem.path.name == "recording.rrd"
+            else "resuming rewrites it"
+        )
+        console.print(f"note: {problem.path}: {problem.fault}; {then}", markup=False, highlight=False)
     task = compile_task(spec)
     if timesteps:
         write_spec(run, spec, task.xml)
@@ -135,7 +145,7 @@ def _train_and_evaluate(
     except KeyboardInterrupt as stop:  # before training: writing demonstrations, repairing the old recording
         with shielded():
             update_meta(run, status="interrupted")
-        done = int(json.loads((ckpt / "state.json").read_text())["timesteps"]) if ckpt else 0
+        done = read_state(ckpt)["timesteps"] if ckpt else 0
         raise RunInterrupted(run, done, signal_name(stop)) from None
     except OSError as e:
         if not is_disk_full(e):
@@ -151,7 +161,7 @@ def _train_and_evaluate(
     except KeyboardInterrupt as stop:  # between stages (saving the final checkpoint or the networks)
         _close(run, recorder)
         ckpt = latest_checkpoint(run)
-        done = json.loads((ckpt / "state.json").read_text())["timesteps"] if ckpt else 0
+        done = read_state(ckpt)["timesteps"] if ckpt else 0
         raise RunInterrupted(run, done, signal_name(stop)) from None
     except BaseException:
         _close(run, recorder)
