@@ -24,7 +24,7 @@ from .evaluate import evaluate, evaluate_batched
 from .learner import build_learner
 from .monitor import TrainingMonitor
 from .rundir import clean_leftovers, latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
-from .runfiles import read_run_spec, read_state, require
+from .runfiles import read_metrics, read_run_spec, read_state, require
 from .saved import load_policy
 from .stops import (
     EvaluationInterrupted,
@@ -116,14 +116,7 @@ def metrics_until(path: Path, timesteps: int) -> list[dict]:
     """metrics.jsonl cut back to the rows up to `timesteps` (torn lines dropped), as a resume redoes the rest."""
     if not path.exists():
         return []
-    rows = []
-    for line in path.read_text().splitlines():
-        try:
-            row = json.loads(line)
-        except ValueError:
-            continue
-        if isinstance(row, dict) and isinstance(row.get("timesteps"), int) and row["timesteps"] <= timesteps:
-            rows.append(row)
+    rows = [row for row in read_metrics(path.parent) if row["timesteps"] <= timesteps]
     write_text(path, "".join(json.dumps(r) + "\n" for r in rows))
     return rows
 

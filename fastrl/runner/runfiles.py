@@ -101,6 +101,26 @@ def read_run_spec(run: Path, overrides=()) -> TaskSpec:
         raise RunFileError(RunProblem(path, fault, advice)) from None
 
 
+def read_metrics(run: Path) -> list[dict]:
+    """metrics.jsonl's rows, each a mapping with whole-number timesteps; torn or foreign lines are left out."""
+    path = Path(run) / "metrics.jsonl"
+    try:
+        text = path.read_bytes().decode("utf-8", "replace")
+    except FileNotFoundError:
+        return []
+    except OSError as e:
+        raise RunFileError(RunProblem(path, f"cannot be read ({e.strerror or e})", _repair(run))) from None
+    rows = []
+    for line in text.splitlines():
+        try:
+            row = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(row, dict) and isinstance(row.get("timesteps"), int):
+            rows.append(row)
+    return rows
+
+
 def recording_fault(path: Path) -> str | None:
     """Why an .rrd lacks its footer (cut short by a kill or a full disk), from its last bytes only; None if whole."""
     try:
