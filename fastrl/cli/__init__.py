@@ -355,25 +355,22 @@ def view(
     import shutil
     import subprocess
 
+    from ..runner.runfiles import recording_fault
+    from .runcheck import check_run
+
+    if (run_dir / "recording.rrd").is_file():  # a run directory (a sweep folder is served as it is)
+        check_run(run_dir, {"recording.rrd"})
+    elif run_dir.is_file() and (fault := recording_fault(run_dir)):
+        err.print(f"{run_dir}: {fault}; mend it with: fastrl repair {run_dir.parent}", markup=False)
+        raise typer.Exit(code=2)
     if web:
         from .web import view_web
 
         return view_web(run_dir, port)
-
-    from .runcheck import check_run
-
     rrd = run_dir / "recording.rrd" if run_dir.is_dir() else run_dir
     if not rrd.exists():
         err.print(f"no recording at {rrd}", markup=False)
         raise typer.Exit(code=2)
-    if run_dir.is_dir():
-        check_run(run_dir, {"recording.rrd"})
-    else:
-        from ..runner.runfiles import recording_fault
-
-        if fault := recording_fault(rrd):
-            err.print(f"{rrd}: {fault}; mend it with: fastrl repair {rrd.parent}", markup=False)
-            raise typer.Exit(code=2)
     viewer = shutil.which("rerun")
     if viewer and (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         subprocess.Popen([viewer, str(rrd)])
