@@ -136,3 +136,15 @@ def test_the_footer_check_reads_only_the_tail(done, tmp_path):
     t0 = time.perf_counter()
     assert "no RRD footer" in recording_fault(big)
     assert time.perf_counter() - t0 < 0.5
+
+
+@pytest.mark.parametrize("damaged", ["meta.json", "eval.json"])
+def test_a_sweep_trial_with_a_damaged_file_counts_as_unfinished(done, tmp_path, damaged):
+    """`fastrl sweep --resume` resumes such a trial (rewriting the file) instead of stopping on a traceback."""
+    from fastrl.runner.sweep import is_finished
+
+    run = tmp_path / done.name
+    shutil.copytree(done, run)
+    assert is_finished(run)
+    cut(run / damaged)
+    assert not is_finished(run)
