@@ -32,5 +32,6 @@ def test_a_second_sigint_50_ms_after_the_first_is_ignored_until_exit(tmp_path, s
     assert err.splitlines()[-1] == f"resume with: fastrl run --resume {run}", err
     verify(run / "recording.rrd")
     meta = json.loads((run / "meta.json").read_text())
-    assert meta["status"] == ("interrupted" if stage == "training" else "trained, evaluation interrupted")
+    # at evaluation's very start the stop may land between stages, before its episodes: then a plain interruption
+    assert meta["status"] in ("interrupted", "trained, evaluation interrupted" if stage == "evaluation" else "")
     assert resume(run, 256 if stage == "training" else None) >= meta["trained_timesteps"]

@@ -151,8 +151,10 @@ def _train_and_evaluate(
         _stages(run, spec, learner, before, recorder, console, progress)
     except DiskFull as full:
         raise _out_of_space(run, full, recorder) from None
-    except KeyboardInterrupt as stop:  # between stages (saving the final checkpoint or the networks)
+    except KeyboardInterrupt as stop:  # between stages: saving final/ or the networks, evaluation's start
         _close(run, recorder)
+        with shielded():
+            update_meta(run, status="interrupted")
         ckpt = latest_checkpoint(run)
         done = read_state(ckpt)["timesteps"] if ckpt else 0
         raise RunInterrupted(run, done, signal_name(stop)) from None
