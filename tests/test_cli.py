@@ -77,6 +77,19 @@ def test_check_bad_spec():
     assert result.stdout == ""
 
 
+def test_check_refuses_term_parameters_outside_their_domain(tmp_path):
+    """Issue 42: `margin: 0` (and `--set` of -0.02) passed `fastrl check`; now FILE:LINE or --set, exit 2."""
+    text = (SPECS / "imagecentring.yaml").read_text(encoding="utf-8")
+    path = tmp_path / "margin.yaml"
+    path.write_text(text.replace("distance:  {weight: 0.0}", "distance:  {weight: 1.0, params: {margin: 0}}"))
+    line = next(n for n, t in enumerate(path.read_text().splitlines(), 1) if "margin: 0" in t)
+    result = invoke("check", path)
+    assert result.exit_code == 2 and "Traceback" not in result.output
+    assert result.stderr.startswith(f"{path}:{line}: reward.features.distance.params.margin: must be a number from")
+    result = invoke("check", SPECS / "imagecentring.yaml", "--set", "reward.features.distance.params.margin=-0.02")
+    assert result.exit_code == 2 and result.stderr.startswith("--set: reward.features.distance.params.margin:")
+
+
 def test_check_mixed_files_checks_all():
     """One bad file among good ones: exit 2, its message shown, the good ones still reported ok."""
     bad = BAD / "duplicate_key.yaml"

@@ -3,15 +3,20 @@ SpecError with one-line FILE:LINE issues; never another exception, never a hang.
 
 from __future__ import annotations
 
+import math
+from datetime import timedelta
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fastrl.cli import load
+from fastrl.env.fast_env import FastEnv
 from fastrl.spec import SpecError
+from fastrl.terms import REWARD_FEATURES
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 TEXTS = {p.stem: p.read_text(encoding="utf-8") for p in sorted(SPECS.glob("*.yaml"))}
@@ -142,3 +147,52 @@ def _has(node, seg) -> bool:
 def test_hostile_overrides(key, value):
     """--set KEY=VALUE with any key and any text: loads or names the override."""
     check(SPECS / "tracelines.yaml", [f"{key}={value}"])
+
+
+# Term parameters: the values that have broken features (zero, negative, subnormal, huge, non-finite, wrong types).
+PARAM_VALUES = st.one_of(
+    st.sampled_from([0, 0.0, -0.0, -0.02, -1, 5e-324, 1e-300, 1e-7, 1e-6, 1e-3, 0.02, 1, 179.0, 180.0, 1e300]),
+    st.sampled_from([float("nan"), float("inf"), float("-inf"), True, None, "0.02", [], 2**63]),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(min_value=-(2**64), max_value=2**64),
+)
+STEP = settings(FUZZ, max_examples=40, deadline=timedelta(seconds=60))
+
+
+@st.composite
+def reward_features(draw) -> dict:
+    """One to four registered features, parametrised ones first, each with a weight and some mutated parameters."""
+    names = sorted(REWARD_FEATURES, key=lambda n: (not REWARD_FEATURES[n].params, n))
+    chosen = draw(st.lists(st.sampled_from(names[:8]) | st.sampled_from(names), min_size=1, max_size=4, unique=True))
+    out = {}
+    for name in chosen:
+        keys = draw(st.lists(st.sampled_from([*REWARD_FEATURES[name].params, "margn"]), max_size=3, unique=True))
+        params = {k: draw(PARAM_VALUES) for k in keys if k != "margn" or draw(st.integers(0, 9)) == 0}
+        out[name] = {"weight": draw(st.sampled_from([-1.0, 1.0]) | st.floats(-1, 1)), "params": params}
+    return out
+
+
+@STEP
+@given(name=st.sampled_from(sorted(TEXTS)), features=reward_features(), seed=st.integers(0, 2**16))
+def test_accepted_term_parameters_step_1000_times(tmp_path_factory, name, features, seed):
+    """Reward features with mutated parameters: refused by `fastrl check` with FILE:LINE, or 1,000 finite steps."""
+    import copy
+
+    data = copy.deepcopy(DATA[name])
+    data["reward"]["features"].update(features)
+    file = tmp_path_factory.getbasetemp() / f"params_{name}.yaml"
+    file.write_text(yaml.safe_dump(data, allow_unicode=True), encoding="utf-8")
+    try:
+        task = load(file)
+    except SpecError as e:
+        assert all(str(i).startswith(f"{file}:") and "\n" not in str(i) for i in e.errors), e
+        return
+    env = FastEnv(task.spec)
+    env.reset(seed=seed)
+    env.action_space.seed(seed)
+    for _ in range(1000):
+        obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+        assert math.isfinite(reward) and np.isfinite(obs).all(), (features, reward)
+        if terminated or truncated:
+            env.reset()
+    env.close()

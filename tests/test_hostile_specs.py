@@ -149,6 +149,27 @@ CASES = [
         "neither 'key: value' nor a list item",
     ),
     Case("python_tag", sub(IC, "name: imagecentring", "name: !!python/object:os.system x"), 7, "", "tag"),
+    Case(  # issue 42: MuJoCo's JSON step refused it, with no line or field
+        "lone_surrogate",
+        sub(IC, "name: lateral", 'name: "lat\\ud800"'),
+        line_of(IC, "name: lateral"),
+        "scene.portals.0.name",
+        "holds \\ud800, half of a UTF-16 surrogate pair",
+    ),
+    Case(
+        "lone_surrogate_key",
+        sub(IC, "params: {max_speed: 0.08}", 'params: {"max\\udfff": 0.08}'),
+        65,
+        "reward.features.velocity.params.max\udfff",
+        "this key holds \\udfff",
+    ),
+    Case(
+        "surrogate_pair_escaped_as_halves",
+        sub(IC, "description: Image centring", 'description: "\\ud83d\\ude00 Image centring" #'),
+        line_of(IC, "description: Image centring"),
+        "description",
+        "\\ud83d",
+    ),
 ]
 
 
@@ -200,7 +221,7 @@ def test_special_files_are_refused_without_blocking(tmp_path):
 
 
 HOSTILE_CLI = ["alias_bomb_unknown_key", "deep_flow_lists", "nul_character", "line_of_10000_points", "inf_weight"]
-HOSTILE_CLI += ["time_limit_below_one_step", "indentation", "recursive_alias"]
+HOSTILE_CLI += ["time_limit_below_one_step", "indentation", "recursive_alias", "lone_surrogate"]
 
 
 @pytest.mark.parametrize("command", ["check", "run"])

@@ -165,7 +165,7 @@ CASES = [
         "centring_deg: -3 ",
         "centring_deg: -3",
         "task.cue.centring_deg",
-        "greater than 0",
+        "greater than or equal to 0.000001",  # a microdegree: the cue potential divides by it
     ),
     Case(
         "decreasing_distance",
@@ -219,7 +219,34 @@ CASES = [
         "params: {scale: narrow}",
         "scale: narrow",
         "reward.features.line_deviation.params.scale",
-        "must be a number, got 'narrow'",
+        "must be a number from 1e-06 to 1 (a length in m, above zero), got 'narrow'",
+    ),
+    Case(
+        "feature_margin_zero",  # issue 42: passed the type check, then divided by zero outside the band
+        "imagecentring",
+        "distance:  {weight: 0.0}",
+        "distance:  {weight: 1.0, params: {margin: 0}}",
+        "margin: 0",
+        "reward.features.distance.params.margin",
+        "must be a number from 1e-06 to 1 (a length in m, above zero), got 0",
+    ),
+    Case(
+        "feature_margin_negative",
+        "imagecentring",
+        "distance:  {weight: 0.0}",
+        "distance:  {weight: 1.0, params: {margin: -0.02}}",
+        "margin: -0.02",
+        "reward.features.distance.params.margin",
+        "got -0.02",
+    ),
+    Case(
+        "feature_speed_bool",
+        "imagecentring",
+        "velocity:  {weight: -0.1, params: {max_speed: 0.08}}",
+        "velocity:  {weight: -0.1, params: {max_speed: yes}}",
+        "max_speed",
+        "reward.features.velocity.params.max_speed",
+        "must be a number from 1e-06 to 100 (a speed in m/s, above zero), got True",
     ),
     Case(
         "unknown_observation_term",

@@ -271,10 +271,13 @@ def test_a_damaged_newest_checkpoint_is_reported_and_resume_falls_back(tmp_path)
     proc.terminate()
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143 and "Traceback" not in err, err
-    assert err.splitlines() == [
+    *notes, stopped, again = err.splitlines()  # first a note per damaged checkpoint, as every command reading a run
+    assert [stopped, again] == [
         "SIGTERM: evaluation stopped; nothing was written",
         f"evaluate again with: fastrl eval {run}",
     ]
+    torn_note = f"note: {torn}: no state.json (it was being written when the run stopped); resume continues from"
+    assert notes == [f"{torn_note} {latest_checkpoint(run)}"]
     assert not (run / "again.json").exists()
 
 

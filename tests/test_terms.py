@@ -119,6 +119,44 @@ def test_feature_params_are_checked_against_the_signature():
     assert REWARD_FEATURES["velocity"].check_params({"max_speed": "fast"})[0][1].startswith("must be a number")
 
 
+def test_every_term_parameter_has_a_domain_its_default_lies_in():
+    """Each registered term declares a domain per parameter; registering one without it fails at import."""
+    from fastrl.terms.registry import Registry
+
+    for term in [*REWARD_FEATURES.values(), *OBSERVATION_TERMS.values()]:
+        assert set(term.domains) == set(term.params), term.name
+        assert term.check_params({k: p.default for k, p in term.params.items()}) == [], term.name
+    with pytest.raises(TypeError, match="domains"):
+        Registry("test").register(lambda s, margin=0.1: s)
+
+
+@pytest.mark.parametrize(
+    ("name", "params"),
+    [
+        ("distance", {"margin": 0}),
+        ("distance", {"margin": -0.02}),
+        ("velocity", {"max_speed": 0.0}),
+        ("angle", {"margin_deg": 5e-324}),
+        ("horizon", {"margin_deg": float("inf")}),
+        ("line_deviation", {"scale": float("nan")}),
+        ("steadiness", {"scale": -1}),
+        ("tool_near", {"within": -0.001}),
+        ("tool_near", {"margin": 1e-300}),
+    ],
+)
+def test_parameters_that_divide_by_zero_or_overflow_are_refused(name, params):
+    """The values issue 42 found (margin 0, negative margins) and their kin: each named, with the domain in words."""
+    [(key, problem)] = REWARD_FEATURES[name].check_params(params)
+    assert key in params and problem.startswith("must be a") and repr(params[key]) in problem, problem
+    assert REWARD_FEATURES[name].domains[key].problem(REWARD_FEATURES[name].params[key].default) is None
+
+
+def test_tolerance_is_zero_far_outside_without_overflow():
+    """At the smallest margin a domain allows, far outside the band: 0, not an OverflowError."""
+    assert tolerance(1.0, 0.0, 0.01, math.radians(1e-6)) == 0.0
+    assert 0.0 < tolerance(0.0105, 0.0, 0.01, 0.001) < 1.0
+
+
 def test_progress_cannot_be_farmed_by_leaving_and_refilling_the_dwell_bar():
     from fastrl.env.cues import update_dwell
 

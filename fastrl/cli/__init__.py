@@ -262,26 +262,29 @@ def train_and_report(
     from ..agents.sb3 import CheckpointDamaged, CheckpointMismatch
     from ..atomic import DiskFull
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace, resume_run, start_run
+    from ..runner.runfiles import RunFileError, read_eval
+    from ..runner.stops import stop_on_sigterm
     from .stops import report_stop
 
-    try:
-        if resume is not None:
-            from .experiment import experiment_and_report, is_experiment
+    with stop_on_sigterm(until_exit=True):  # a second Ctrl-C while the run saves is ignored until exit
+        try:
+            if resume is not None:
+                from .experiment import experiment_and_report, is_experiment
 
-            if is_experiment(resume):
-                return experiment_and_report(None, [], resume, runs, progress)
-            run_dir = resume_run(resume, out, progress, timesteps)
-        else:
-            if load_or_exit(spec, overrides).spec.experiment.enabled:
-                from .experiment import experiment_and_report
+                if is_experiment(resume):
+                    return experiment_and_report(None, [], resume, runs, progress)
+                run_dir = resume_run(resume, out, progress, timesteps)
+            else:
+                if load_or_exit(spec, overrides).spec.experiment.enabled:
+                    from .experiment import experiment_and_report
 
-                return experiment_and_report(spec, overrides, None, runs, progress)
-            run_dir = start_run(spec, overrides, runs, out, progress)
-    except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
-        report_stop(stop)
-    except (SpecError, FileNotFoundError, CheckpointMismatch, CheckpointDamaged) as e:
-        exit_with(e)
-    results = json.loads((run_dir / "eval.json").read_text())
+                    return experiment_and_report(spec, overrides, None, runs, progress)
+                run_dir = start_run(spec, overrides, runs, out, progress)
+        except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
+            report_stop(stop)
+        except (SpecError, FileNotFoundError, CheckpointMismatch, CheckpointDamaged, RunFileError) as e:
+            exit_with(e)
+    results = read_eval(run_dir)
     print_eval(results)
     from ..runner.advice import learning_advice
 
@@ -322,19 +325,24 @@ def eval_(
 ) -> None:
     """Re-evaluate a saved run (deterministic episodes), or the scripted expert on a spec."""
     from ..runner import EvaluationInterrupted, evaluate_expert, evaluate_saved
+    from ..runner.stops import stop_on_sigterm
+    from .runcheck import check_run
     from .stops import stop_code
 
     if (run_dir is None) == (expert is None):
         err.print("give RUN_DIR, or --expert SPEC", markup=False)
         raise typer.Exit(code=2)
-    try:
-        results = evaluate_saved(run_dir, episodes) if run_dir else evaluate_expert(expert, (), episodes)
-    except EvaluationInterrupted as stop:
-        err.print(f"{stop.signal_name}: evaluation stopped; nothing was written", markup=False)
-        err.print(f"evaluate again with: fastrl eval {stop.run}", markup=False)
-        raise typer.Exit(code=stop_code(stop.signal_name)) from None
-    except (SpecError, FileNotFoundError) as e:
-        exit_with(e)
+    if run_dir is not None:
+        check_run(run_dir, {"spec.yaml"})
+    with stop_on_sigterm(until_exit=True):
+        try:
+            results = evaluate_saved(run_dir, episodes) if run_dir else evaluate_expert(expert, (), episodes)
+        except EvaluationInterrupted as stop:
+            err.print(f"{stop.signal_name}: evaluation stopped; nothing was written", markup=False)
+            err.print(f"evaluate again with: fastrl eval {stop.run}", markup=False)
+            raise typer.Exit(code=stop_code(stop.signal_name)) from None
+        except (SpecError, FileNotFoundError) as e:
+            exit_with(e)
     print_eval(results)
     if output is not None:
         write_text(output, json.dumps(results, indent=2))
@@ -351,11 +359,18 @@ def view(
     import shutil
     import subprocess
 
+    from ..runner.runfiles import recording_fault
+    from .runcheck import check_run
+
+    if (run_dir / "recording.rrd").is_file():  # a run directory (a sweep folder is served as it is)
+        check_run(run_dir, {"recording.rrd"})
+    elif run_dir.is_file() and (fault := recording_fault(run_dir)):
+        err.print(f"{run_dir}: {fault}; mend it with: fastrl repair {run_dir.parent}", markup=False)
+        raise typer.Exit(code=2)
     if web:
         from .web import view_web
 
         return view_web(run_dir, port)
-
     rrd = run_dir / "recording.rrd" if run_dir.is_dir() else run_dir
     if not rrd.exists():
         err.print(f"no recording at {rrd}", markup=False)

@@ -14,9 +14,10 @@ from . import err, exit_with, out
 
 def is_experiment(run: Path) -> bool:
     """Whether a run directory holds an experiment (its experiment.json, or meta.json kind)."""
-    meta = run / "meta.json"
+    from ..runner.runfiles import read_meta
+
     return (run / "experiment.json").exists() or (
-        meta.exists() and json.loads(meta.read_text()).get("kind") == "experiment"
+        (run / "meta.json").exists() and read_meta(run).get("kind") == "experiment"
     )
 
 

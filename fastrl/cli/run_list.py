@@ -47,6 +47,9 @@ def runs_(
             pct(r["subtasks"]),
         )
     out.print(table)
+    for r in rows:
+        for problem in r["problems"]:
+            out.print(escape(problem))
 
 
 def _count(n: int | None) -> str:

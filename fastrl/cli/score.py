@@ -45,6 +45,10 @@ def score(
     if (run is None) == (spec is None):
         err.print("give --run RUN_DIR, or --spec SPEC", markup=False)
         raise typer.Exit(code=2)
+    if run is not None:
+        from .runcheck import check_run
+
+        check_run(run, {"spec.yaml"})
     try:
         result = assess(
             inputs,

@@ -53,13 +53,27 @@ def report_out_of_space(stop) -> None:
 @app.command()
 def repair(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR", show_default=False)]) -> None:
     """Rewrite recordings cut short by a kill or a full disk from their complete chunks; name bad checkpoints."""
+    from ..agents.sb3 import checkpoint_problem
     from ..atomic import DiskFull
     from ..log.recording import repair_recording
-    from ..runner.rundir import latest_checkpoint
+    from ..runner.rundir import latest_checkpoint, rebuild_meta
+    from ..runner.runfiles import RunFileError, read_eval, read_meta, read_run_spec
 
-    if not (run_dir / "spec.yaml").exists():
-        err.print(f"{run_dir} is not a run directory (no spec.yaml)", markup=False)
-        raise typer.Exit(code=2)
+    try:
+        read_run_spec(run_dir)
+    except (FileNotFoundError, RunFileError) as e:
+        err.print(str(e), markup=False)
+        raise typer.Exit(code=2) from None
+    try:
+        read_meta(run_dir)
+    except RunFileError as e:
+        kept = rebuild_meta(run_dir)
+        out.print(f"rebuilt  {escape(str(run_dir / 'meta.json'))} ({escape(e.problem.fault)}; kept as {kept.name})")
+    if (run_dir / "eval.json").exists():
+        try:
+            read_eval(run_dir)
+        except RunFileError as e:
+            out.print(f"damaged  {escape(str(e))}")
     for rrd in sorted(run_dir.glob("recording*.rrd")):
         try:
             fixed = repair_recording(rrd)
@@ -71,4 +85,9 @@ def repair(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR", show_defau
     ckpt = latest_checkpoint(run_dir, skipped)
     for message in skipped:
         out.print(f"damaged checkpoint (resume passes over it): {escape(message)}")
+    if (run_dir / "final").exists() and (fault := checkpoint_problem(run_dir / "final")):
+        out.print(
+            f"damaged final policy (fastrl eval uses the newest whole checkpoint): {run_dir / 'final'}: {fault}",
+            markup=False,
+        )
     out.print(f"resume from: {escape(str(ckpt))}" if ckpt else "no whole checkpoint: resume starts from 0 timesteps")

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from ..bundled import SPECS_DIR, find_spec
 from ..spec import SpecError, load_spec
+from .runfiles import read_eval, read_meta
 
 FAR_BELOW = 0.5  # the agent completes under half the expert's share of subtasks
 
@@ -28,7 +28,7 @@ def learning_advice(run: Path, spec_path: Path | None = None) -> str | None:
     `spec_path` is the spec file the run started from: its own train.timesteps (before --timesteps
     or --set) is the budget to suggest. Without it (a resumed run) the run's spec.yaml stands in.
     """
-    ev = json.loads((run / "eval.json").read_text())
+    ev = read_eval(run)
     agent, expert = ev.get("agent"), ev.get("expert")
     if not agent or not expert:
         return None
@@ -36,7 +36,7 @@ def learning_advice(run: Path, spec_path: Path | None = None) -> str | None:
     if reference <= 0 or done >= FAR_BELOW * reference:
         return None
     spec = load_spec(run / "spec.yaml")
-    trained = json.loads((run / "meta.json").read_text()).get("trained_timesteps") or spec.train.timesteps
+    trained = read_meta(run).get("trained_timesteps") or spec.train.timesteps
     budget = load_spec(spec_path).train.timesteps if spec_path is not None else spec.train.timesteps
     tips = []
     if trained < budget:

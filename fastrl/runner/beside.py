@@ -7,6 +7,8 @@ import signal
 from collections.abc import Callable
 from typing import Any
 
+STOPS = {signal.SIGINT, signal.SIGTERM}
+
 
 class ChildFailed(RuntimeError):
     """The forked child ended without a result (killed, or out of memory)."""
@@ -15,11 +17,17 @@ class ChildFailed(RuntimeError):
 def _compute(fn: Callable[[], Any], out, parent_end) -> None:
     """The child: ignore Ctrl-C (the parent decides), compute, send (ok, value or exception), exit."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # the parent's cancel() or exit ends it: quietly
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPS)
     parent_end.close()
     try:
-        out.send((True, fn()))
+        result = (True, fn())
     except Exception as error:  # noqa: BLE001 - handed to the parent, which raises it
-        out.send((False, error))
+        result = (False, error)
+    try:
+        out.send(result)
+    except OSError:  # BrokenPipeError: the parent stopped waiting (a stop, a cancel): there is no one to tell
+        pass
     finally:
         out.close()
 
@@ -35,7 +43,11 @@ class Beside:
             ctx = mp.get_context("fork")
             self.here, there = ctx.Pipe(duplex=False)
             self.child = ctx.Process(target=_compute, args=(fn, there, self.here), daemon=True)
-            self.child.start()
+            held = signal.pthread_sigmask(signal.SIG_BLOCK, STOPS)  # a stop during fork() comes after it, not inside
+            try:  # the at-fork hooks, where Python would print it and carry on
+                self.child.start()
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, held)
             there.close()
 
     def result(self) -> Any:

@@ -24,6 +24,7 @@ from .evaluate import evaluate, evaluate_batched
 from .learner import build_learner
 from .monitor import TrainingMonitor
 from .rundir import clean_leftovers, latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
+from .runfiles import read_metrics, read_run_spec, read_state, require
 from .saved import load_policy
 from .stops import (
     EvaluationInterrupted,
@@ -60,12 +61,21 @@ def start_run(
 
 
 def resume_run(run: Path, console: Console | None = None, progress: bool = True, timesteps: int | None = None) -> Path:
-    """Continue a run from its newest whole checkpoint (naming damaged ones) to its budget; evaluate and record."""
+    """Continue a run from its newest whole checkpoint (naming damaged ones) to its budget; evaluate and record.
+
+    A damaged spec.yaml or meta.json raises RunFileError before anything is written."""
     run = Path(run)
     console = console or Console()
-    if not (run / "spec.yaml").exists():
-        raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
-    spec = load_spec(run / "spec.yaml", [f"train.timesteps={timesteps}"] if timesteps else [])
+    spec = read_run_spec(run, [f"train.timesteps={timesteps}"] if timesteps else [])
+    for problem in require(run, {"spec.yaml", "meta.json"}):
+        if problem.path.parent.name == "checkpoints":
+            continue  # named below, as resume passes over it
+        then = (
+            "resuming keeps it aside and rewrites it"
+            if problem.path.name == "recording.rrd"
+            else "resuming rewrites it"
+        )
+        console.print(f"note: {problem.path}: {problem.fault}; {then}", markup=False, highlight=False)
     task = compile_task(spec)
     if timesteps:
         write_spec(run, spec, task.xml)
@@ -106,14 +116,7 @@ def metrics_until(path: Path, timesteps: int) -> list[dict]:
     """metrics.jsonl cut back to the rows up to `timesteps` (torn lines dropped), as a resume redoes the rest."""
     if not path.exists():
         return []
-    rows = []
-    for line in path.read_text().splitlines():
-        try:
-            row = json.loads(line)
-        except ValueError:
-            continue
-        if isinstance(row, dict) and isinstance(row.get("timesteps"), int) and row["timesteps"] <= timesteps:
-            rows.append(row)
+    rows = [row for row in read_metrics(path.parent) if row["timesteps"] <= timesteps]
     write_text(path, "".join(json.dumps(r) + "\n" for r in rows))
     return rows
 
@@ -135,7 +138,7 @@ def _train_and_evaluate(
     except KeyboardInterrupt as stop:  # before training: writing demonstrations, repairing the old recording
         with shielded():
             update_meta(run, status="interrupted")
-        done = int(json.loads((ckpt / "state.json").read_text())["timesteps"]) if ckpt else 0
+        done = read_state(ckpt)["timesteps"] if ckpt else 0
         raise RunInterrupted(run, done, signal_name(stop)) from None
     except OSError as e:
         if not is_disk_full(e):
@@ -148,10 +151,12 @@ def _train_and_evaluate(
         _stages(run, spec, learner, before, recorder, console, progress)
     except DiskFull as full:
         raise _out_of_space(run, full, recorder) from None
-    except KeyboardInterrupt as stop:  # between stages (saving the final checkpoint or the networks)
+    except KeyboardInterrupt as stop:  # between stages: saving final/ or the networks, evaluation's start
         _close(run, recorder)
+        with shielded():
+            update_meta(run, status="interrupted")
         ckpt = latest_checkpoint(run)
-        done = json.loads((ckpt / "state.json").read_text())["timesteps"] if ckpt else 0
+        done = read_state(ckpt)["timesteps"] if ckpt else 0
         raise RunInterrupted(run, done, signal_name(stop)) from None
     except BaseException:
         _close(run, recorder)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import platform
 import shutil
 import subprocess
@@ -18,6 +17,7 @@ from ..agents.sb3 import checkpoint_problem
 from ..atomic import write_json, write_text
 from ..spec import spec_hash
 from ..spec.models import TaskSpec
+from .runfiles import read_eval, read_meta, read_run_spec, read_state, run_problems
 
 PACKAGES = (DISTRIBUTION, "mujoco", "gymnasium", "stable-baselines3", "torch", "numpy", "pydantic", "rerun-sdk")
 
@@ -98,9 +98,31 @@ def write_meta(run: Path, spec: TaskSpec, source: str, extra: dict | None = None
 def update_meta(run: Path, **fields) -> None:
     """Merge fields into meta.json."""
     path = run / "meta.json"
-    meta = json.loads(path.read_text()) if path.exists() else {}
+    meta = read_meta(run) if path.exists() else {}
     meta.update(fields)
     write_json(path, meta)
+
+
+def rebuild_meta(run: Path) -> Path:
+    """Replace a damaged meta.json (kept beside it, renamed) by one rebuilt from spec.yaml and the newest checkpoint;
+    return where the damaged one went."""
+    spec = read_run_spec(run)
+    kept, k = run / "meta.json.damaged", 1
+    while kept.exists():
+        k += 1
+        kept = run / f"meta.json.damaged-{k}"
+    (run / "meta.json").rename(kept)
+    ckpt = latest_checkpoint(run)
+    state = read_state(ckpt) if ckpt else {"timesteps": 0}
+    started = datetime.fromtimestamp((run / "spec.yaml").stat().st_mtime, UTC).isoformat(timespec="seconds")
+    finished = (run / "eval.json").exists() and checkpoint_problem(run / "final") is None
+    extra = {
+        "status": "done" if finished else "interrupted",
+        "trained_timesteps": state["timesteps"],
+        "train_seconds": state.get("train_seconds"),
+    }
+    write_meta(run, spec, "unknown (meta.json rebuilt by fastrl repair)", {**extra, "started_utc": started})
+    return kept
 
 
 def latest_checkpoint(run: Path, skipped: list[str] | None = None) -> Path | None:
@@ -132,32 +154,27 @@ def clean_leftovers(run: Path) -> list[Path]:
 
 
 def list_runs(root: Path) -> list[dict]:
-    """Every run under root with its headline figures, newest first."""
+    """Every run under root with its headline figures, newest first; damaged files are named in `problems`."""
     rows = []
-    for meta_path in Path(root).glob("*/*/meta.json"):
-        run = meta_path.parent
-        try:
-            meta = json.loads(meta_path.read_text())
-        except (OSError, json.JSONDecodeError):
-            continue
-        ev = {}
-        if (run / "eval.json").exists():
-            try:
-                ev = json.loads((run / "eval.json").read_text()).get("agent", {})
-            except (OSError, json.JSONDecodeError):
-                ev = {}
+    found = {p.parent for name in ("meta.json", "spec.yaml") for p in Path(root).glob(f"*/*/{name}")}
+    for run in found:
+        problems = run_problems(run)
+        damaged = {p.path.name for p in problems}
+        meta = read_meta(run) if "meta.json" not in damaged and (run / "meta.json").exists() else {}
+        ev = read_eval(run)["agent"] if "eval.json" not in damaged and (run / "eval.json").exists() else {}
         rows.append(
             {
                 "run": str(run),
                 "spec": meta.get("spec_name"),
                 "algo": meta.get("algo"),
                 "seed": meta.get("seed"),
-                "status": meta.get("status", "?"),
+                "status": "damaged" if problems else str(meta.get("status", "?")),
                 "timesteps": meta.get("trained_timesteps"),
                 "wall_s": meta.get("train_seconds"),
                 "success": ev.get("success_rate"),
                 "subtasks": ev.get("subtasks_completed"),
-                "started": meta.get("started_utc", ""),
+                "started": str(meta.get("started_utc", "")),
+                "problems": [str(p) for p in problems],
             }
         )
     return sorted(rows, key=lambda r: r["started"], reverse=True)

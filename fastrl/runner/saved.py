@@ -6,17 +6,15 @@ import warnings
 from pathlib import Path
 
 from ..agents.sb3 import build_model, checkpoint_problem, load_checkpoint, make_vec_env, policy_function
-from ..spec import load_spec
 from ..spec.models import TaskSpec
 from .rundir import latest_checkpoint
+from .runfiles import read_run_spec
 
 
 def load_policy(run: Path) -> tuple[TaskSpec, object]:
     """A saved run's spec and its final (or newest) policy as obs -> action."""
     run = Path(run)
-    if not (run / "spec.yaml").exists():
-        raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
-    spec = load_spec(run / "spec.yaml")
+    spec = read_run_spec(run)
     weights = run / "final" if checkpoint_problem(run / "final") is None else latest_checkpoint(run)
     if weights is None:
         raise FileNotFoundError(f"{run} has no saved policy")

@@ -53,36 +53,54 @@ def signal_name(stop: BaseException) -> str:
     return "SIGTERM" if isinstance(stop, Terminated) else "SIGINT"
 
 
-def _raise_terminated(signum, frame) -> None:
-    """SIGTERM handler: stop the main thread as Ctrl-C would."""
-    raise Terminated()
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_stopping = [False]  # a stop was raised and not yet handed back: set by _stop, cleared by stop_on_sigterm
+
+
+def _stop(signum, frame) -> None:
+    """SIGINT or SIGTERM: stop the main thread with KeyboardInterrupt (Terminated for SIGTERM)."""
+    _stopping[0] = True
+    raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
 
 
 @contextmanager
-def stop_on_sigterm() -> Iterator[None]:
-    """While active, SIGTERM raises Terminated (a KeyboardInterrupt) in the main thread, so it stops as Ctrl-C does."""
+def stop_on_sigterm(*, until_exit: bool = False) -> Iterator[None]:
+    """While active, SIGINT and SIGTERM raise KeyboardInterrupt (SIGTERM: Terminated) in the main thread.
+
+    Once a stop is caught and saving (`shielded`), later signals are ignored: a second Ctrl-C cannot cut the save
+    short. Leaving, the handlers come back, unless a stop happened and `until_exit` (the command line, about to exit:
+    a late Ctrl-C must not interrupt the interpreter's shutdown) or an enclosing stop_on_sigterm carries on."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    previous = {s: signal.signal(s, _stop) for s in STOP_SIGNALS}
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        if _stopping[0] and (until_exit or previous[signal.SIGINT] is _stop):
+            for s in STOP_SIGNALS:
+                signal.signal(s, signal.SIG_IGN)
+        else:
+            for s, handler in previous.items():
+                signal.signal(s, handler)
+            _stopping[0] = False
 
 
 @contextmanager
 def shielded() -> Iterator[None]:
-    """While active (saving the last checkpoint, closing the recording), SIGINT and SIGTERM are held off."""
+    """While active (saving the last checkpoint, closing the recording), SIGINT and SIGTERM are held off; after a
+    stop they stay ignored until stop_on_sigterm ends (a first stop lost where Python ignores exceptions, as in an
+    at-fork hook, leaves the handlers armed: the next signal stops)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    held = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGTERM)}
+    held = {s: signal.signal(s, signal.SIG_IGN) for s in STOP_SIGNALS}
     try:
         yield
     finally:
-        for s, handler in held.items():
-            signal.signal(s, handler)
+        if not _stopping[0]:
+            for s, handler in held.items():
+                signal.signal(s, handler)
 
 
 def tree_bytes(path: Path) -> int:

@@ -18,6 +18,7 @@ from rich.console import Console
 from ..model.compiler import compile_task
 from ..spec import SpecError, SpecIssue, load_spec
 from .rundir import latest_checkpoint
+from .runfiles import RunFileError, read_eval, read_meta
 
 MANIFEST = "sweep.json"
 
@@ -101,12 +102,11 @@ def trial_overrides(trial: dict) -> list[str]:
 
 def is_finished(run: Path) -> bool:
     """Whether a trial's run directory holds a finished run (status done, eval.json written)."""
-    meta = run / "meta.json"
-    if not (meta.exists() and (run / "eval.json").exists()):
+    if not ((run / "meta.json").exists() and (run / "eval.json").exists()):
         return False
-    try:
-        return json.loads(meta.read_text()).get("status") == "done"
-    except (OSError, json.JSONDecodeError):
+    try:  # a damaged meta.json or eval.json: not finished, so --resume resumes the trial and rewrites them
+        return read_meta(run).get("status") == "done" and bool(read_eval(run))
+    except RunFileError:
         return False
 
 
@@ -204,7 +204,7 @@ def run_trial(config: dict) -> None:
         info = {"trial": trial, "node_id": node, "host": socket.gethostname(), "pid": os.getpid()}
         info |= {"wall_s": time.perf_counter() - t0, "torch_threads": torch.get_num_threads()}
         (run / "trial.json").write_text(json.dumps(info, indent=2))
-    agent = json.loads((run / "eval.json").read_text())["agent"]
+    agent = read_eval(run)["agent"]
     tune.report(
         {
             "success": agent["success_rate"],

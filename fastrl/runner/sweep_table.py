@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .runfiles import read_eval
 from .sweep import is_finished, read_manifest
 
 METRICS = {"success": "success_rate", "subtasks": "subtasks_completed", "return": "return_mean"}
@@ -18,7 +19,7 @@ def trial_row(run: Path) -> dict | None:
     """A finished trial's figures (evaluation of its agent, wall time, node), or None if it did not finish."""
     if not is_finished(run):
         return None
-    agent = json.loads((run / "eval.json").read_text())["agent"]
+    agent = read_eval(run)["agent"]
     info = json.loads((run / "trial.json").read_text()) if (run / "trial.json").exists() else {}
     row = {k: float(agent[v]) for k, v in METRICS.items()}
     return row | {"wall_s": info.get("wall_s"), "node_id": info.get("node_id")}

@@ -18,7 +18,7 @@ from pydantic import BaseModel, ValidationError
 from yaml.nodes import MappingNode, SequenceNode
 
 from .limits import MAX_INT, MAX_SPEC_BYTES, open_regular
-from .yamlsafe import LimitError, error_line, plain_yaml_problem
+from .yamlsafe import LimitError, error_line, plain_yaml_problem, text_problems
 from .yamlsafe import Loader as _Loader
 
 
@@ -314,7 +314,7 @@ def load_model(path, model_cls: type[BaseModel], overrides: list[str] = (), cont
         if issue not in issues:
             issues.append(issue)
 
-    for where, message in number_problems(data):
+    for where, message in number_problems(data) + text_problems(data):
         add(where, message)
     if not issues:
         try:

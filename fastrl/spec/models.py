@@ -48,8 +48,9 @@ class Scope(Shaft):
 class Cue(Strict):
     """Tolerances under which an avatar turns green, and how long they must hold."""
 
-    centring_deg: Pos = 8.0
-    horizon_deg: Pos = 15.0
+    # at least a microdegree: the cue potential divides by them in radians, where a subnormal one rounds to 0
+    centring_deg: float = Field(8.0, ge=1e-6, le=180)
+    horizon_deg: float = Field(15.0, ge=1e-6, le=180)
     distance: tuple[Pos, Pos] = (0.02, 0.05)
     dwell: NonNeg = 0.5
 

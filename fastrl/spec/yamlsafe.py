@@ -184,3 +184,32 @@ def plain_yaml_problem(err: yaml.YAMLError, context_line: int | None) -> str:
         return problem
     where = f" ({context}" + (f" at line {context_line})" if context_line else ")") if context else ""
     return f"invalid YAML: {problem or 'syntax error'}{where}"
+
+
+_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
+def text_problems(data: Any) -> list[tuple[tuple, str]]:
+    """(path, problem) for every key or text value holding a lone UTF-16 surrogate ("\\ud800"): not a character."""
+    problems, stack = [], [(data, ())]
+    while stack:
+        node, path = stack.pop()
+        if isinstance(node, dict):
+            for k, v in node.items():
+                if isinstance(k, str) and _SURROGATE.search(k):
+                    problems.append((path + (k,), _surrogate_message(k, "key")))
+                stack.append((v, path + (k,)))
+        elif isinstance(node, list):
+            stack += [(v, path + (i,)) for i, v in enumerate(node)]
+        elif isinstance(node, str) and _SURROGATE.search(node):
+            problems.append((path, _surrogate_message(node, "text")))
+    return problems
+
+
+def _surrogate_message(text: str, what: str) -> str:
+    """The one-line explanation for a text holding a lone surrogate."""
+    code = ord(_SURROGATE.search(text).group())
+    return (
+        f"this {what} holds \\u{code:04x}, half of a UTF-16 surrogate pair, which is not a character: "
+        "write the character itself, or escape it whole as \\UXXXXXXXX"
+    )

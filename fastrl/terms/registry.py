@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
+
+from .domain import Domain
 
 
 @dataclass(frozen=True)
@@ -19,6 +21,7 @@ class Term:
     size: int = 1
     needs: tuple[str, ...] = ()
     per: str = ""  # "instrument": size values per instrument; "coordinate": one per instrument coordinate
+    domains: dict[str, Domain] = field(default_factory=dict)  # each parameter's allowed values, from registration
 
     def width(self, coordinates: list[int]) -> int:
         """Values the term gives for instruments with these coordinate counts (spec order)."""
@@ -29,17 +32,14 @@ class Term:
         return self.size
 
     def check_params(self, given: dict[str, Any]) -> list[tuple[str, str]]:
-        """Return (param, problem) pairs for parameters the function does not take or mistypes."""
+        """(param, problem) pairs for parameters the function does not take or whose values leave their domain."""
         problems = []
         for key, value in given.items():
             if key not in self.params:
                 known = ", ".join(self.params) or "none"
                 problems.append((key, f"'{self.name}' takes no parameter '{key}' (it takes: {known})"))
-                continue
-            default = self.params[key].default
-            if isinstance(default, (int, float)) and not isinstance(default, bool):
-                if isinstance(value, bool) or not isinstance(value, (int, float)):
-                    problems.append((key, f"must be a number, got {value!r}"))
+            elif problem := self.domains[key].problem(value):
+                problems.append((key, problem))
         return problems
 
 
@@ -50,13 +50,27 @@ class Registry(dict):
         super().__init__()
         self.kind = kind
 
-    def register(self, fn=None, *, size: int = 1, needs: tuple[str, ...] = (), per: str = ""):
-        """Register `fn` under its own name; the first argument is the task state."""
+    def register(
+        self,
+        fn=None,
+        *,
+        size: int = 1,
+        needs: tuple[str, ...] = (),
+        per: str = "",
+        domains: dict[str, Domain] | None = None,
+    ):
+        """Register `fn` under its own name; the first argument is the task state, every other one needs a domain."""
 
         def add(f):
-            sig = list(inspect.signature(f).parameters.values())[1:]
+            sig = {p.name: p for p in list(inspect.signature(f).parameters.values())[1:]}
+            given = dict(domains or {})
+            if set(given) != set(sig):  # a programming error: caught at import, by every test
+                raise TypeError(f"{f.__name__}: domains {sorted(given)} do not match its parameters {sorted(sig)}")
+            for name, p in sig.items():
+                if given[name].problem(p.default) is not None:
+                    raise TypeError(f"{f.__name__}: default {name}={p.default!r} is outside its own domain")
             doc = (f.__doc__ or "").strip().splitlines()[0] if f.__doc__ else ""
-            self[f.__name__] = Term(f.__name__, f, {p.name: p for p in sig}, doc, size, needs, per)
+            self[f.__name__] = Term(f.__name__, f, sig, doc, size, needs, per, given)
             return f
 
         return add(fn) if fn is not None else add

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from .domain import ACCELERATION, ANGLE, LENGTH, SPEED
 from .registry import REWARD_FEATURES
 from .state import TaskState
 from .vec import norm
@@ -13,11 +14,11 @@ _GAUSS = math.sqrt(-2.0 * math.log(0.1))  # kernel value 0.1 at one margin outsi
 
 
 def tolerance(x: float, lo: float, hi: float, margin: float) -> float:
-    """1 inside [lo, hi], Gaussian fall-off to 0.1 at one margin outside."""
+    """1 inside [lo, hi], Gaussian fall-off to 0.1 at one margin outside (0 far outside, never an overflow)."""
     if lo <= x <= hi:
         return 1.0
-    d = (lo - x if x < lo else x - hi) / margin
-    return math.exp(-0.5 * (d * _GAUSS) ** 2)
+    d = (lo - x if x < lo else x - hi) * _GAUSS
+    return math.exp(-0.5 * (d / margin) ** 2) if d < 1e6 * margin else 0.0
 
 
 def cue_potential(s: TaskState) -> float:
@@ -50,25 +51,25 @@ def time(s: TaskState) -> float:
     return 1.0
 
 
-@feature
+@feature(domains={"max_speed": SPEED})
 def velocity(s: TaskState, max_speed: float = 0.05) -> float:
     """Tip speed above `max_speed` (m/s), relative to it; 0 below."""
     return max(0.0, s.tip_speed - max_speed) / max_speed
 
 
-@feature
+@feature(domains={"margin": LENGTH})
 def distance(s: TaskState, margin: float = 0.02) -> float:
     """Tolerance kernel of the viewing distance against the cue's range."""
     return tolerance(s.distance, s.dist_lo, s.dist_hi, margin)
 
 
-@feature
+@feature(domains={"margin_deg": ANGLE})
 def angle(s: TaskState, margin_deg: float = 20.0) -> float:
     """Tolerance kernel of the centring angle against the cue's tolerance."""
     return tolerance(s.centring, 0.0, s.tol_centring, math.radians(margin_deg))
 
 
-@feature
+@feature(domains={"margin_deg": ANGLE})
 def horizon(s: TaskState, margin_deg: float = 30.0) -> float:
     """Tolerance kernel of the horizon error against the cue's tolerance."""
     return tolerance(s.horizon, 0.0, s.tol_horizon, math.radians(margin_deg))
@@ -86,13 +87,13 @@ def rays(s: TaskState) -> float:
     return s.ray_fraction
 
 
-@feature
+@feature(domains={"scale": LENGTH})
 def line_deviation(s: TaskState, scale: float = 0.01) -> float:
     """Distance from where the optical axis meets the plate to the line, in units of `scale` (m)."""
     return s.line_deviation / scale
 
 
-@feature
+@feature(domains={"scale": ACCELERATION})
 def steadiness(s: TaskState, scale: float = 1.0) -> float:
     """Tip acceleration magnitude in units of `scale` (m/s^2); weight it negative for steady motion."""
     return norm(s.tip_accel) / scale

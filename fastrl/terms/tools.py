@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from .domain import DISTANCE, LENGTH
 from .registry import OBSERVATION_TERMS, REWARD_FEATURES
 from .rewards import tolerance
 from .state import TaskState
@@ -9,7 +10,7 @@ from .state import TaskState
 feature, term = REWARD_FEATURES.register, OBSERVATION_TERMS.register
 
 
-@feature
+@feature(domains={"within": DISTANCE, "margin": LENGTH})
 def tool_near(s: TaskState, within: float = 0.004, margin: float = 0.03) -> float:
     """Tolerance kernel of the instrument tip's distance to the target: 1 within `within` m."""
     return tolerance(s.tool_distance, 0.0, within, margin)
