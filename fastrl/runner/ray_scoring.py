@@ -43,7 +43,8 @@ def connect(address: str) -> bool:
         raise ValueError("--address needs Ray: pip install 'fastrl-surgery[sweep]'") from None
     if ray.is_initialized():
         return False
-    if address == "local":
+    if address == "local":  # on loopback only (else Ray picks the machine's network address)
+        os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
         cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
         ray.init(num_cpus=cpus, include_dashboard=False, log_to_driver=False, logging_level="WARNING")
     else:
