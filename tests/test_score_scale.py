@@ -9,6 +9,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 import yaml
 
@@ -19,6 +20,7 @@ from fastrl.assess.scoring import Scorer, normalise
 from fastrl.runner import archive, assessment
 from fastrl.runner.archive import sample_indices
 from fastrl.runner.assessment import assess
+from fastrl.runner.protocol import rank_recordings
 
 from .test_assess import _spec, airl_run, degraded  # noqa: F401 (airl_run: the tiny real AIRL run, a fixture)
 
@@ -145,3 +147,18 @@ def test_scores_on_a_local_ray_equal_those_scored_here(airl_run, cohort, tmp_pat
     assert reports[0] == reports[1] and all(r["reward_raw"] is not None for r in reports[1]["trajectories"])
     assert sorted(journaled(ray.parent / "scores.journal.jsonl")) == sorted(map(str, folder.glob("*.npz")))
     assert (ray.parent / "scores_paths.png").stat().st_size > 10_000 and "rrd" in result.files
+
+
+def test_recordings_ranked_one_at_a_time_keep_only_the_best_trajectories(cohort):
+    folder, _ = cohort
+    (folder.parent / "bad").mkdir(exist_ok=True)
+    (folder.parent / "bad" / "x.npz").write_bytes(b"broken")
+    everything, skipped = rank_recordings(_spec(), [folder, folder.parent / "bad"], "heuristic")
+    bounded, skipped_too = rank_recordings(_spec(), [folder, folder.parent / "bad"], "heuristic", top=2)
+    assert skipped == skipped_too and "x.npz" in skipped[0]
+    assert [(s.name, s.scores["heuristic"]) for s, _ in bounded] == [
+        (s.name, s.scores["heuristic"]) for s, _ in everything
+    ]
+    assert [t is not None for _, t in bounded] == [True, True, False, False, False, False]
+    np.testing.assert_array_equal(bounded[1][1].portal, everything[1][1].portal)
+    assert all(len(s.tip) == 0 for s, _ in bounded) and all(len(s.tip) > 0 for s, _ in everything)
