@@ -1,6 +1,7 @@
 """Scoring archives: the journal resumes after a real SIGINT, bad files and torn lines, the sampled pictures'
 report equal to the whole one, and Ray's scores equal to this process's."""
 
+import io
 import json
 import os
 import shutil
@@ -12,6 +13,7 @@ import time
 import numpy as np
 import pytest
 import yaml
+from rich.console import Console
 
 from fastrl.assess.journal import Journal
 from fastrl.assess.references import reference_scores
@@ -112,7 +114,9 @@ def test_a_corrupt_file_is_named_a_torn_line_rescored_and_another_scorers_journa
     assert assess([files], **run).resumed == 6
     header = json.loads(journal.read_text().splitlines()[0])
     journal.write_text(json.dumps({**header, "identity": "another scorer"}) + "\n" + "\n".join(text.splitlines()[1:]))
-    replaced = assess([files], **run)
+    said = io.StringIO()
+    replaced = assess([files], **run, console=Console(file=said, width=300))
+    assert "written by another scorer" in said.getvalue() and str(journal) in said.getvalue()
     assert replaced.resumed == 0 and without_seconds(replaced.report) == without_seconds(first.report)
     assert Journal(path=journal, identity=header["identity"]).lines()  # rewritten under this scorer
 

@@ -172,6 +172,8 @@ def assess(
     cache = run / "assessment" / "references.json" if run is not None else None
     journal = Journal(path=paths["journal"], identity=identity(run / "spec.yaml" if run else spec_path, networks))
     job = plan_job(files, journal, pictures, fresh, streaming)
+    for note in journal.notes:
+        console.print(f"note: {note}", markup=False, highlight=False)
     if len(job.todo) < len(files):
         console.print(
             f"resuming: {len(files) - len(job.todo)} of {len(files)} files already scored in {journal.path}",
