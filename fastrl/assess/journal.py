@@ -100,7 +100,7 @@ class Journal:
         self.fd = os.open(self.path, flags, 0o644)
         if not keep:
             self._write({"journal": FORMAT, "identity": self.identity})
-        elif not self.path.read_bytes().endswith(b"\n"):
+        elif not _ends_a_line(self.path):
             os.write(self.fd, b"\n")  # after a torn line, the next starts on its own
         return self
 
@@ -135,3 +135,12 @@ class Journal:
     def _write(self, line: dict) -> None:
         """One JSON line in one write."""
         os.write(self.fd, (json.dumps(line, default=float) + "\n").encode())
+
+
+def _ends_a_line(path: Path) -> bool:
+    """Whether a file is empty or its last byte is a newline (read alone, not the whole file)."""
+    with path.open("rb") as f:
+        if f.seek(0, os.SEEK_END) == 0:
+            return True
+        f.seek(-1, os.SEEK_END)
+        return f.read(1) == b"\n"
