@@ -72,7 +72,8 @@ def test_a_rerun_after_sigint_scores_only_the_files_not_journaled(cohort, tmp_pa
     journal = out.parent / "scores.journal.jsonl"
     cmd = [sys.executable, "-m", "fastrl.cli", "score", "--spec", str(spec), str(many), "-o", str(out)]
     cmd += ["--references", "1", "--no-pictures", "--no-progress"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    reset = lambda: signal.signal(signal.SIGINT, signal.SIG_DFL)  # noqa: E731 (a job run with & ignores SIGINT)
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=reset)
     deadline = time.monotonic() + 600
     while proc.poll() is None and (not journal.exists() or len(journaled(journal)) < 5):
         assert time.monotonic() < deadline
