@@ -11,6 +11,7 @@ import sys
 import time
 
 import numpy as np
+import psutil
 import pytest
 import yaml
 from rich.console import Console
@@ -93,6 +94,36 @@ def test_a_rerun_after_sigint_scores_only_the_files_not_journaled(cohort, tmp_pa
     whole = tmp_path / "whole" / "scores.json"
     assess([many], spec_path=spec, output=whole, reference_episodes=1, pictures=False, progress=False)
     assert without_seconds(json.loads(out.read_text())) == without_seconds(json.loads(whole.read_text()))
+
+
+def test_after_a_kill_the_helper_stops_and_a_rerun_scores_only_the_files_not_journaled(cohort, tmp_path):
+    folder, spec = cohort
+    many = tmp_path / "many"
+    many.mkdir()
+    for k in range(12):
+        for f in sorted(folder.glob("*.npz")):
+            shutil.copy(f, many / f"{f.stem}_{k:02d}.npz")
+    out = tmp_path / "out" / "scores.json"
+    journal = out.parent / "scores.journal.jsonl"
+    cmd = [sys.executable, "-m", "fastrl.cli", "score", "--spec", str(spec), str(many), "-o", str(out)]
+    cmd += ["--references", "1", "--no-pictures", "--no-progress"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 600
+    while proc.poll() is None and (not journal.exists() or len(journaled(journal)) < 5):
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    helpers = psutil.Process(proc.pid).children()
+    assert len(helpers) == 1  # 72 files: the forked helper shares the work
+    proc.kill()
+    proc.wait()
+    psutil.wait_procs(helpers, timeout=60)  # it stops after the file in hand, not at the last file
+    assert not any(h.is_running() and h.status() != psutil.STATUS_ZOMBIE for h in helpers)
+    first = journaled(journal)
+    assert 5 <= len(first) < 72
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    assert f"scored 72 trajectories ({len(first)} read from the journal)" in res.stdout
+    assert sorted(journaled(journal)) == sorted(map(str, many.glob("*.npz")))  # each file once
 
 
 def test_a_corrupt_file_is_named_a_torn_line_rescored_and_another_scorers_journal_replaced(cohort, tmp_path):

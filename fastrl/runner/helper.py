@@ -21,12 +21,13 @@ from ..assess.scoring import Scorer, learned_scores
 MIN_FILES = 16  # below this, forking costs more than it saves
 _SCORER: Scorer | None = None  # the forked worker's copy of the parent's scorer
 _NEXT = None  # the worker's handle on the shared counter
+_PARENT: int | None = None  # the parent's pid: if it dies (a kill), the worker stops taking files
 
 
 def _adopt(scorer: Scorer, counter) -> None:
     """Worker start: keep the inherited scorer and counter; Ctrl-C is the parent's to handle."""
-    global _SCORER, _NEXT
-    _SCORER, _NEXT = scorer, counter
+    global _SCORER, _NEXT, _PARENT
+    _SCORER, _NEXT, _PARENT = scorer, counter, os.getppid()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
@@ -50,9 +51,11 @@ def _score_share(files: list[Path], journal: Journal | None = None, keep: set[in
         return score_shared(files, _NEXT, _SCORER.score_file)
     journal.open()
     try:
-        return score_shared(files, _NEXT, _SCORER.score_file, sink=journaling(journal, files, keep))
+        return score_shared(files, _NEXT, _SCORER.score_file, orphaned, journaling(journal, files, keep))
     finally:
         journal.close()
+        if orphaned():  # no one will read the result, and the pool's queue would keep this process waiting
+            os._exit(0)
 
 
 def _learned(observations: list[np.ndarray]) -> list[dict]:
@@ -63,6 +66,11 @@ def _learned(observations: list[np.ndarray]) -> list[dict]:
 def _expert(seeds: list[int]):
     """Worker side of `Helper.expert_paths`."""
     return compute_expert_paths(_SCORER, seeds)
+
+
+def orphaned() -> bool:
+    """Whether the worker's parent has died (killed): then it stops after the file in hand, which is journaled."""
+    return os.getppid() != _PARENT
 
 
 def take(counter) -> int:
