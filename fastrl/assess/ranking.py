@@ -8,6 +8,8 @@ import warnings
 import numpy as np
 
 PAIR_LIMIT = 2000  # samples up to which n x n pair counts are cheap; beyond, scipy's own statistics
+BOOT_PAIR_LIMIT = 300  # the bootstrap's pair counts cost n_boot x n^2: beyond, scipy per resample (same bits)
+BOOT_ELEMENTS = 200_000  # resampled values held at once by the bootstrap (its memory does not grow with samples)
 
 
 def _finite(x) -> float | None:
@@ -130,18 +132,39 @@ def _tau_of(x: np.ndarray, y: np.ndarray) -> float:
     return float(_tau_b(*(int(v[0]) for v in _pair_counts(x, y, np.ones((1, n), np.int64))), n * (n - 1) // 2))
 
 
+def _bootstrap(scores: np.ndarray, labels: np.ndarray, n_boot: int, rng) -> np.ndarray:
+    """(Spearman rho, Kendall tau-b) of `n_boot` resamples, a few at a time so that memory stays bounded however
+    many samples there are (each resample's figures do not depend on how many are computed at once); beyond
+    BOOT_PAIR_LIMIT samples, Kendall's by scipy one resample at a time (the same bits, cheaper than n^2 pairs)."""
+    n = len(scores)
+    rows = max(1, min(n_boot, BOOT_ELEMENTS // max(1, n)))
+    out = [np.empty((0, 2))]
+    for start in range(0, n_boot, rows):
+        i = np.array([rng.integers(0, n, n) for _ in range(min(rows, n_boot - start))])
+        if n <= BOOT_PAIR_LIMIT:
+            tau = _boot_kendall(scores, labels, i)
+        else:
+            tau = np.array([_kendall_scipy(scores[d], labels[d]) for d in i])
+        out.append(np.stack([_spearman(scores[i], labels[i]), tau], axis=1))
+    return np.concatenate(out)
+
+
+def _kendall_scipy(x: np.ndarray, y: np.ndarray) -> float:
+    """scipy's Kendall tau-b alone (NaN where undefined)."""
+    from scipy.stats import kendalltau
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return float(kendalltau(x, y, variant="b").statistic)
+
+
 def rank_correlations(scores, labels, n_boot: int = 1000, seed: int = 0, level: float = 0.95) -> dict:
     """Spearman and Kendall tau-b of scores against labels, bootstrap CIs, and the order of level means."""
     scores, labels = np.asarray(scores, float), np.asarray(labels, float)
     keep = np.isfinite(scores) & np.isfinite(labels)
     scores, labels = scores[keep], labels[keep]
     rho, rho_p, tau, tau_p = _stats(scores, labels)
-    rng = np.random.default_rng(seed)
-    draws = [rng.integers(0, len(scores), len(scores)) for _ in range(n_boot if len(scores) > 2 else 0)]
-    boot = np.empty((0, 2))
-    if draws:
-        i = np.array(draws)
-        boot = np.stack([_spearman(scores[i], labels[i]), _boot_kendall(scores, labels, i)], axis=1)
+    boot = _bootstrap(scores, labels, n_boot if len(scores) > 2 else 0, np.random.default_rng(seed))
     lo, hi = (1 - level) / 2 * 100, (1 + level) / 2 * 100
 
     def ci(col: int) -> list | None:

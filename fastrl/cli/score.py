@@ -37,6 +37,15 @@ def score(
     references: Annotated[int, typer.Option(help="episodes per normalisation reference")] = 3,
     pictures: Annotated[bool, typer.Option(help="write the PNG figures and the Rerun recording")] = True,
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
+    address: Annotated[
+        str | None,
+        typer.Option(
+            "--address", metavar="RAY", help="score on this Ray cluster ('local': start one); same paths on every node"
+        ),
+    ] = None,
+    fresh: Annotated[
+        bool, typer.Option(help="score every file again (default: skip those already in the report's journal)")
+    ] = False,
 ) -> None:
     """Score trajectories by replay: heuristic and learned reward, learned value, length, time, smoothness."""
     from ..runner.assessment import assess
@@ -59,9 +68,18 @@ def score(
             pictures=pictures,
             console=err,
             progress=progress,
+            address=address,
+            fresh=fresh,
         )
     except (SpecError, FileNotFoundError, ValueError) as e:
         exit_with(e)
+    except KeyboardInterrupt:
+        from ..runner.assessment import outputs_for
+
+        journal = outputs_for(output, run)["journal"]
+        err.print(f"interrupted: the files scored so far are kept in {journal}", markup=False)
+        err.print("run the same command again to score the rest", markup=False)
+        raise typer.Exit(code=130) from None
     report = result.report
     for problem in report["problems"]:
         err.print(f"skipped {problem}", markup=False, style="yellow")
@@ -72,7 +90,8 @@ def score(
         raise typer.Exit(code=2)
     print_report(report)
     n, secs = len(report["trajectories"]), result.seconds["scoring"]
-    out.print(f"scored {n} trajectories in {secs:.2f} s (replay included); {len(report['problems'])} skipped")
+    resumed = f" ({result.resumed} read from the journal)" if result.resumed else ""
+    out.print(f"scored {n} trajectories{resumed} in {secs:.2f} s (replay included); {len(report['problems'])} skipped")
     for kind, path in result.files.items():
         out.print(f"  {kind}: {escape(str(path))}")
 

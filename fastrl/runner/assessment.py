@@ -12,12 +12,14 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from ..assess.figures import deviations, draw_path_figures, group_of, plot_distributions
+from ..assess.journal import Journal, identity
 from ..assess.references import expert_paths, references_for
-from ..assess.report import build_report, csv_text, group_key, row, score_files, trajectory_files
+from ..assess.report import SCORING_ERRORS, build_report, csv_text, group_key, problem_text, row, trajectory_files
 from ..assess.scoring import Scorer, TrajectoryScores, normalise, with_learned
 from ..irl.network_files import has_networks
 from ..spec import load_spec
-from .helper import Helper, score_shared
+from .archive import SAMPLE, Job, gathered, plan_job, sample_note
+from .helper import Helper, journaling, score_shared
 
 
 @dataclass
@@ -27,14 +29,15 @@ class Assessment:
     report: dict
     files: dict[str, Path] = field(default_factory=dict)
     seconds: dict[str, float] = field(default_factory=dict)
+    resumed: int = 0  # files whose scores were read from the journal, not scored again
 
 
 @dataclass
 class Scored:
-    """Every file scored (in file order), the problems, and what normalises the scores."""
+    """The trajectories kept whole for the pictures (by file index) and what normalises the scores; every file's
+    scalars and problems are in the journal."""
 
-    scored: list[TrajectoryScores]
-    problems: list[str]
+    kept: dict[int, TrajectoryScores]
     references: dict
     recordings: list | None  # the recordings the run learned from (the upper reference), else None
     learned: bool
@@ -69,34 +72,53 @@ def outputs_for(output: Path | None, run: Path | None) -> dict[str, Path]:
         "deviation": parent / f"{stem}_deviation.png",
         "distributions": parent / f"{stem}_distributions.png",
         "rrd": parent / f"{stem}.rrd",
+        "journal": parent / f"{stem}.journal.jsonl",
     }
 
 
-def score_here(scorer: Scorer, files: list[Path], episodes: int, cache: Path | None, on_file) -> Scored:
-    """Score every file in this process."""
+def score_here(scorer: Scorer, job: Job, episodes: int, cache: Path | None, on_file) -> Scored:
+    """Score every file to do in this process."""
     references, recordings = references_for(scorer, episodes, cache)
-    scored, problems = score_files(scorer, files, on_file=lambda _f: on_file())
-    return Scored(scored, problems, references, recordings, scorer.learned)
+    sink = journaling(job.journal, job.files, job.keep)
+    kept = {}
+    for i in job.todo:
+        try:
+            entry = (i, scorer.score_file(job.files[i]), None)
+        except SCORING_ERRORS as e:
+            entry = (i, None, problem_text(job.files[i], e))
+        if sink(*entry):
+            kept[i] = entry[1]
+        on_file()
+    return Scored({i: s for i, s in kept.items() if s is not None}, references, recordings, scorer.learned)
 
 
 def score_with_helper(
     helper: Helper,
     scorer: Scorer,
-    files: list[Path],
+    job: Job,
     networks: Path | None,
     episodes: int,
     cache: Path | None,
     on_file,
     pictures: bool,
 ) -> Scored:
-    """Score in two processes taking files from one counter. The worker loads the networks (so this process never
-    imports torch) and the references first, then scores with them; this process replays meanwhile and has the
-    worker evaluate its share's learned scores at the end, each trajectory on its own as in score_here.
+    """Score in two processes taking files from one counter; each journals what it scores. The worker loads the
+    networks and the references first, then scores with them. Where this process has no networks (few files: it
+    never imports torch) it replays meanwhile and has the worker evaluate its share's learned scores at the end,
+    each trajectory on its own as in score_here; with many files it loads the networks after the fork and scores
+    whole, so that nothing piles up.
 
     With `pictures`, each process first imports what it will draw with (matplotlib there, Rerun here): the counter
     shares out the files, so time spent importing now is made up by the other process scoring more."""
     prepared = helper.prepare(networks, episodes, cache, pictures)
-    theirs = helper.score_share(files)
+    todo = [job.files[i] for i in job.todo]
+    keep = {k for k, i in enumerate(job.todo) if i in job.keep}
+    theirs = helper.score_share(todo, Journal(path=job.journal.path, identity=job.journal.identity), keep)
+    whole = networks is None or job.streaming
+    if whole and networks is not None:
+        from ..irl.networks import load_networks
+
+        scorer.attach(load_networks(networks))
     if pictures:
         from ..log import assessment  # noqa: F401 (Rerun and the colour map)
 
@@ -105,14 +127,19 @@ def score_with_helper(
         on_file()
         return prepared.done() and prepared.exception() is not None
 
-    mine = score_shared(files, helper.counter, scorer.replay_file, after_file)
+    if whole:
+        mine = score_shared(todo, helper.counter, scorer.score_file, after_file, journaling(job.journal, todo, keep))
+    else:
+        mine = score_shared(todo, helper.counter, scorer.replay_file, after_file)
     learned, references, recordings = prepared.result()  # the worker's error, if any, is raised here
-    replayed = [r for _, r, _ in mine if r is not None]
-    for (s, _), extra in zip(replayed, helper.learned([obs for _, obs in replayed]).result()):
-        with_learned(s, extra)
-    everything = sorted([(i, r and r[0], p) for i, r, p in mine] + theirs.result(), key=lambda e: e[0])
-    scored = [s for _, s, _ in everything if s is not None]
-    return Scored(scored, [p for _, _, p in everything if p is not None], references, recordings, learned)
+    if not whole:
+        replayed = [r for _, r, _ in mine if r is not None]
+        for (s, _), extra in zip(replayed, helper.learned([obs for _, obs in replayed]).result()):
+            with_learned(s, extra)
+        sink = journaling(job.journal, todo, keep)
+        mine = [(i, r and r[0], p) for i, r, p in mine if sink(i, r and r[0], p)]
+    kept = {job.todo[i]: s for i, s, _ in mine + theirs.result() if s is not None}
+    return Scored(kept, references, recordings, learned)
 
 
 def assess(
@@ -125,18 +152,34 @@ def assess(
     console: Console | None = None,
     progress: bool = True,
     parallel: bool | None = None,
+    address: str | None = None,
+    fresh: bool = False,
 ) -> Assessment:
     """Score every trajectory file under `inputs` and write the report and its pictures.
 
-    `parallel`: score and draw in a second, forked process (None: when there are enough files and a second core)."""
+    `parallel`: score and draw in a second, forked process (None: when there are enough files and a second core).
+    `address`: score on Ray instead ("local" starts one here). Each file scored is journaled beside the report: a
+    rerun skips those journaled with the same size and time (`fresh`: none). Beyond SAMPLE files, only a sample
+    of them is kept whole for the pictures, the rest as scalars."""
     console = console or Console(stderr=True)
     files = trajectory_files(inputs)
-    parallel = Helper.worth_it(len(files)) if parallel is None else parallel
+    streaming = len(files) > SAMPLE
+    parallel = address is None and (Helper.worth_it(len(files)) if parallel is None else parallel)
     t0 = time.perf_counter()
     scorer, recording_id = load_scorer(run, spec_path, networks=not parallel)
     paths, seconds = outputs_for(output, run), {"load": time.perf_counter() - t0}
     networks = run / "networks" if run is not None and has_networks(run / "networks") else None
     cache = run / "assessment" / "references.json" if run is not None else None
+    journal = Journal(path=paths["journal"], identity=identity(run / "spec.yaml" if run else spec_path, networks))
+    job = plan_job(files, journal, pictures, fresh, streaming)
+    for note in journal.notes:
+        console.print(f"note: {note}", markup=False, highlight=False)
+    if len(job.todo) < len(files):
+        console.print(
+            f"resuming: {len(files) - len(job.todo)} of {len(files)} files already scored in {journal.path}",
+            markup=False,
+            highlight=False,
+        )
     helper = Helper(scorer) if parallel else None
     try:
         t0 = time.perf_counter()
@@ -149,38 +192,50 @@ def assess(
             disable=not progress,
             transient=True,
         ) as bar:
-            task = bar.add_task("score", total=len(files))
-            if helper is not None:
+            task = bar.add_task("score", total=len(job.todo))
+            if address is not None:
+                from .ray_scoring import score_on_ray
+
+                done = score_on_ray(
+                    address, scorer, run, spec_path, job, reference_episodes, cache, lambda: bar.advance(task)
+                )
+            elif helper is not None:
 
                 def taken() -> None:
                     """Files taken so far, by either process."""
-                    bar.update(task, completed=min(helper.counter.value, len(files)))
+                    bar.update(task, completed=min(helper.counter.value, len(job.todo)))
 
-                done = score_with_helper(helper, scorer, files, networks, reference_episodes, cache, taken, pictures)
+                done = score_with_helper(helper, scorer, job, networks, reference_episodes, cache, taken, pictures)
             else:
-                done = score_here(scorer, files, reference_episodes, cache, lambda: bar.advance(task))
-        scored, recordings = done.scored, done.recordings
-        normalise(scored, done.references)
+                done = score_here(scorer, job, reference_episodes, cache, lambda: bar.advance(task))
+        journal.close()
+        everything, problems = gathered(journal, files)
+        kept = [done.kept[i] for i in sorted(done.kept)]
+        recordings = done.recordings
+        normalise(everything, done.references)
+        normalise(kept, done.references)
         seconds["scoring"] = time.perf_counter() - t0
         t0 = time.perf_counter()
-        drawing = pictures and bool(scored)
+        drawing = pictures and bool(kept)
         if drawing:  # the path and deviation figures need no report: they start first
             expert_cache = run / "assessment" / "expert_paths.npz" if run is not None else None
-            by = group_key([row(s) for s in scored])
-            seeds = [s.meta.get("seed", 0) for s in scored]
+            by = group_key([row(s) for s in everything])
+            seeds = [s.meta.get("seed", 0) for s in kept]
             compute = helper and helper.expert_paths
-            devs = deviations(scored, expert_paths(scorer, seeds, expert_cache, compute, recordings))
+            devs = deviations(kept, expert_paths(scorer, seeds, expert_cache, compute, recordings))
             radius = scorer.spec.scene.radius
-            early = _run(helper, draw_path_figures, scored, devs, by, paths, radius)
+            early = _run(helper, draw_path_figures, kept, devs, by, paths, radius)
             seconds["pictures"] = time.perf_counter() - t0
         t0 = time.perf_counter()
-        report = build_report(scored, done.references, done.problems, done.learned)
+        report = build_report(everything, done.references, problems, done.learned)
         if recordings is not None:  # 1 is the recordings learned from, not the scripted expert
             report["normalisation"] = report["normalisation"].replace("scripted expert", "recordings learned from")
             report["warnings"] = [w.replace("scripted expert", "recordings learned from") for w in report["warnings"]]
+        if drawing and len(kept) < len(everything):
+            report["pictures_sample"] = sample_note(len(kept), len(everything))
         seconds["report"] = time.perf_counter() - t0
         report["seconds"] = seconds
-        result = Assessment(report, {}, seconds)
+        result = Assessment(report, {}, seconds, resumed=len(files) - len(job.todo))
         paths["json"].parent.mkdir(parents=True, exist_ok=True)
         paths["csv"].write_text(csv_text(report))
         result.files["csv"] = paths["csv"]
@@ -190,12 +245,13 @@ def assess(
             t0 = time.perf_counter()
             late = _run(helper, plot_distributions, report, paths["distributions"])
             rid = recording_id or f"assessment-{scorer.spec.name}"
-            rrd = log_assessment(paths["rrd"], rid, scorer.env.task, scored, report, devs, lambda s: group_of(s, by))
+            rrd = log_assessment(paths["rrd"], rid, scorer.env.task, kept, report, devs, lambda s: group_of(s, by))
             result.files |= early.result() | {"distributions": late.result(), "rrd": rrd}
             seconds["pictures"] += time.perf_counter() - t0
     finally:
         if helper is not None:
             helper.close()
+        journal.close()
     paths["json"].write_text(json.dumps(report, indent=2, default=float))
     result.files["json"] = paths["json"]
     return result

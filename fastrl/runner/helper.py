@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..assess.journal import Journal, record
 from ..assess.references import compute_expert_paths, references_for
 from ..assess.report import SCORING_ERRORS, problem_text
 from ..assess.scoring import Scorer, learned_scores
@@ -20,12 +21,13 @@ from ..assess.scoring import Scorer, learned_scores
 MIN_FILES = 16  # below this, forking costs more than it saves
 _SCORER: Scorer | None = None  # the forked worker's copy of the parent's scorer
 _NEXT = None  # the worker's handle on the shared counter
+_PARENT: int | None = None  # the parent's pid: if it dies (a kill), the worker stops taking files
 
 
 def _adopt(scorer: Scorer, counter) -> None:
     """Worker start: keep the inherited scorer and counter; Ctrl-C is the parent's to handle."""
-    global _SCORER, _NEXT
-    _SCORER, _NEXT = scorer, counter
+    global _SCORER, _NEXT, _PARENT
+    _SCORER, _NEXT, _PARENT = scorer, counter, os.getppid()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
@@ -43,9 +45,17 @@ def _prepare(networks: Path | None, episodes: int, cache: Path | None, pictures:
     return prepared
 
 
-def _score_share(files: list[Path]) -> list[tuple]:
+def _score_share(files: list[Path], journal: Journal | None = None, keep: set[int] | None = None) -> list[tuple]:
     """Worker side of `Helper.score_share`."""
-    return score_shared(files, _NEXT, _SCORER.score_file)
+    if journal is None:
+        return score_shared(files, _NEXT, _SCORER.score_file)
+    journal.open()
+    try:
+        return score_shared(files, _NEXT, _SCORER.score_file, orphaned, journaling(journal, files, keep))
+    finally:
+        journal.close()
+        if orphaned():  # no one will read the result, and the pool's queue would keep this process waiting
+            os._exit(0)
 
 
 def _learned(observations: list[np.ndarray]) -> list[dict]:
@@ -58,6 +68,11 @@ def _expert(seeds: list[int]):
     return compute_expert_paths(_SCORER, seeds)
 
 
+def orphaned() -> bool:
+    """Whether the worker's parent has died (killed): then it stops after the file in hand, which is journaled."""
+    return os.getppid() != _PARENT
+
+
 def take(counter) -> int:
     """The index of the next file to score, from the counter both processes share."""
     with counter.get_lock():
@@ -67,19 +82,37 @@ def take(counter) -> int:
 
 
 def score_shared(
-    files: list[Path], counter, score: Callable, on_file: Callable[[], bool] | None = None
+    files: list[Path],
+    counter,
+    score: Callable,
+    on_file: Callable[[], bool] | None = None,
+    sink: Callable[[int, object, str | None], bool] | None = None,
 ) -> list[tuple[int, object, str | None]]:
     """(index, score(file), None), or (index, None, the problem), for each file taken from `counter` until none is
-    left; `on_file()` after each file may return True to stop early."""
+    left; `on_file()` after each file may return True to stop early. With `sink`, each entry goes to it first and
+    only those it returns True for are listed (the rest are not kept)."""
     out = []
     while (i := take(counter)) < len(files):
         try:
-            out.append((i, score(files[i]), None))
+            entry = (i, score(files[i]), None)
         except SCORING_ERRORS as e:
-            out.append((i, None, problem_text(files[i], e)))
+            entry = (i, None, problem_text(files[i], e))
+        if sink is None or sink(*entry):
+            out.append(entry)
         if on_file is not None and on_file():
             break
     return out
+
+
+def journaling(journal: Journal, files: list[Path], keep: set[int] | None) -> Callable[[int, object, str | None], bool]:
+    """A score_shared sink that journals each file's scores (or problem) and keeps the entries indexed in `keep`."""
+
+    def sink(i: int, scored, problem: str | None) -> bool:
+        """Journal one entry; whether to keep it."""
+        journal.append(record(files[i], scored, problem))
+        return keep is None or i in keep
+
+    return sink
 
 
 def cores() -> int:
@@ -107,10 +140,10 @@ class Helper:
         references, recordings learned from) as `references_for` gives them."""
         return self.pool.submit(_prepare, networks, episodes, cache, pictures)
 
-    def score_share(self, files: list[Path]) -> Future:
+    def score_share(self, files: list[Path], journal: Journal | None = None, keep: set[int] | None = None) -> Future:
         """Score files taken from the shared counter in the worker, with the learned scores; a future of
-        score_shared's list."""
-        return self.pool.submit(_score_share, files)
+        score_shared's list (with `journal`, each file is journaled there and only the indices in `keep` listed)."""
+        return self.pool.submit(_score_share, files, journal, keep)
 
     def learned(self, observations: list[np.ndarray]) -> Future:
         """A future of learned_scores for each trajectory's observations (an empty list without learned networks)."""

@@ -7,13 +7,13 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 from rich.console import Console
 
-from ..assess.report import csv_text
+from ..assess.report import csv_text, trajectory_files
 from ..assess.scoring import Scorer, TrajectoryScores, foreign_problem
 from ..atomic import write_text
 from ..data.inverse import to_control_rate
-from ..data.recordings import load_recordings
 from ..data.trajectory import Trajectory, TrajectoryError
 from ..spec import load_spec
 from .assessment import Assessment, assess, outputs_for
@@ -47,23 +47,44 @@ def rank_key(s: TrajectoryScores, by: str) -> tuple:
     return (-s.scores["subtasks"], s.scores["path_length" if by == "length" else "time"], s.name)
 
 
-def rank_recordings(spec, inputs, by: str) -> tuple[list[tuple[TrajectoryScores, Trajectory]], list[str]]:
+def rank_recordings(
+    spec, inputs, by: str, top: int | None = None
+) -> tuple[list[tuple[TrajectoryScores, Trajectory | None]], list[str]]:
     """Every readable recording of this task on the control grid, scored by replay and sorted best first; the
-    files that cannot be used, as messages naming them."""
-    named, skipped = load_recordings(inputs)
+    files that cannot be used, as messages naming them. Files are read one at a time and, with `top`, only the best
+    `top` keep their trajectory (the others None) and no score keeps its per-sample arrays: memory stays bounded
+    however many recordings there are."""
+    files = trajectory_files(inputs)
     scorer, hz = Scorer(spec), spec.episode.control_hz
-    ranked = []
-    for path, traj in named:
+    ranked, unreadable, skipped = [], [], []
+    for path in files:
+        try:
+            traj = Trajectory.load(path)
+        except TrajectoryError as e:
+            unreadable.append(str(e))
+            continue
         try:
             problem = foreign_problem(traj, spec)
             if problem:
                 raise TrajectoryError(problem)
             traj = to_control_rate(traj, hz)
-            ranked.append((scorer.score(traj, path.stem), traj))
+            scored = scorer.score(traj, path.stem)
         except (TrajectoryError, ValueError) as e:
             skipped.append(f"{path}: {e}")
+            continue
+        if top is not None:
+            scored.time, scored.tip, scored.values = np.empty(0), np.empty((0, 3)), None
+        ranked.append((scored, traj))
+        if top is not None and len(ranked) > 2 * top:  # keep the trajectories of the best `top` so far only
+            ranked = _drop_trajectories(ranked, by, top)
     ranked.sort(key=lambda pair: rank_key(pair[0], by))
-    return ranked, skipped
+    return (ranked if top is None else _drop_trajectories(ranked, by, top)), unreadable + skipped
+
+
+def _drop_trajectories(ranked: list, by: str, top: int) -> list:
+    """The list sorted best first, with the trajectories of all but the best `top` dropped."""
+    ranked = sorted(ranked, key=lambda pair: rank_key(pair[0], by))
+    return ranked[:top] + [(s, None) for s, _ in ranked[top:]]
 
 
 def write_best(
@@ -117,7 +138,7 @@ def run_protocol(
     if seeds < 1:
         raise ValueError(f"--seeds must be at least 1, got {seeds}")
     spec = load_spec(spec_path, overrides)
-    ranked, skipped = rank_recordings(spec, inputs, by)
+    ranked, skipped = rank_recordings(spec, inputs, by, top)
     if not ranked:
         first = f"; {len(skipped)} skipped, the first: {skipped[0]}" if skipped else ""
         raise FileNotFoundError(f"no recording could be read and replayed: nothing to learn from{first}")
