@@ -203,6 +203,12 @@ class TaskSpec(Strict):
             )
         if self.irl.algorithm == "bc" and kind.off_policy:
             _fail("irl.algorithm", "behavioural cloning trains the PPO policy: set train.algo: PPO")
+        if self.irl.algorithm != "none" and self.observation.image is not None:
+            _fail(
+                "irl.algorithm",
+                "learning from demonstrations needs the kinematic observation: remove observation.image "
+                "(pixel policies learn from the spec's reward)",
+            )
         observed = self.observation.terms()
         _raise(
             [
