@@ -90,7 +90,8 @@ def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resumed_at: in
     recorder = RunRecorder(path, recording_id=run.name, run_name=f"{spec.name} {run.name}")
     recorder.log_scene(task)
     n = min(spec.evaluate.record_episodes, spec.evaluate.episodes)
-    recorder.send_blueprint(n, spec.irl.enabled, curves=spec.irl.algorithm != "bc")  # BC logs no curves
+    pixels = spec.observation.image is not None
+    recorder.send_blueprint(n, spec.irl.enabled, curves=spec.irl.algorithm != "bc", pixels=pixels)  # BC: no curves
     if resumed_at is not None:
         history = metrics_until(run / "metrics.jsonl", resumed_at)
         if history:
@@ -234,7 +235,8 @@ def _stages(
     state = {"episodes": monitor.episodes, "train_seconds": seconds, "stopped_early": monitor.stopped_early}
     save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state, learner.parts)
     save_checkpoint(run / "final", model, venv, state, learner.parts)
-    save_networks(run / "networks", model, venv, learner.disc, spec.learning().params().gamma, learner.snapshots)
+    if spec.observation.image is None:  # the safetensors export holds MLPs: a pixel policy stays in final/
+        save_networks(run / "networks", model, venv, learner.disc, spec.learning().params().gamma, learner.snapshots)
     update_meta(
         run,
         status="evaluating",
