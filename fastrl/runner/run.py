@@ -312,12 +312,22 @@ def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: 
 
 
 def expert_summary(spec: TaskSpec, seeds: list[int]) -> dict:
-    """The scripted expert's evaluation figures on the given seeds (no images, no recording)."""
-    env = FastEnv(spec)
+    """The scripted expert's evaluation figures on the given seeds (no images, no recording).
+
+    The expert acts on the task's state, so it goes without image observations: rendering in a child forked
+    after this process rendered (the evaluation during training) would deadlock in Mesa's EGL."""
+    env = FastEnv(without_images(spec))
     expert = ScriptedExpert(env)
     summary, _ = evaluate(env, expert.act, seeds, on_reset=expert.reset)
     env.close()
     return summary
+
+
+def without_images(spec: TaskSpec) -> TaskSpec:
+    """The spec with the kinematic observation alone."""
+    if spec.observation.image is None:
+        return spec
+    return spec.model_copy(update={"observation": spec.observation.model_copy(update={"image": None})})
 
 
 def evaluate_saved(run: Path, episodes: int | None = None) -> dict:
