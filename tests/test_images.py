@@ -137,3 +137,45 @@ def test_frames_cost_less_than_the_whole_scene():
     seen = visible_geoms(env.model, env.data, env.task.camera, frames.cos_half)
     assert 0 < seen.sum() < 0.6 * env.model.ngeom
     assert math.isclose(frames.cos_half, math.cos(math.atan(math.tan(math.radians(40)) * math.sqrt(2))))
+
+
+LOOKS = [
+    "observation.image.size=32",
+    "observation.image.looks.colour=0.3",
+    "observation.image.looks.light=0.5",
+    "observation.image.looks.noise=4",
+    "observation.image.looks.blur=0.5",
+]
+
+
+def test_random_looks_vary_by_episode_and_repeat_by_seed():
+    env = FastEnv(load_spec(spec_file("tracelines"), LOOKS))
+    plain = FastEnv(load_spec(spec_file("tracelines"), ["observation.image.size=32"]))
+    a, b, c = env.reset(seed=1)[0], env.reset(seed=2)[0], env.reset(seed=1)[0]
+    np.testing.assert_array_equal(a, c)  # the same seed: the same looks and noise
+    plate = env.model.geom("plate").id
+    colours = set()
+    for seed in range(4):
+        env.reset(seed=seed)
+        colours.add(tuple(env.model.geom_rgba[plate].round(6)))
+    assert len(colours) == 4  # every episode its own plate colour
+    # the task is the same: its state, and so the kinematic rollout, does not depend on the looks
+    for seed in (1, 2):
+        env.reset(seed=seed)
+        plain.reset(seed=seed)
+        for action in (1, 4, 7):
+            env.step(action)
+            plain.step(action)
+        assert env.state.portal == plain.state.portal and env.state.distance == plain.state.distance
+    assert not np.array_equal(a, b)
+
+
+def test_without_looks_the_compiled_colours_stay():
+    env = pixel_env(size=32)
+    before = env.model.geom_rgba.copy()
+    for seed in range(3):
+        env.reset(seed=seed)
+        env.step(2)
+    np.testing.assert_array_equal(
+        env.model.geom_rgba[: env.task.avatar_geoms.min()], before[: env.task.avatar_geoms.min()]
+    )

@@ -101,6 +101,8 @@ class FastEnv(gym.Env):
         super().reset(seed=seed)
         options = options or {}
         self._reset_targets(jitter=True)
+        if self.frames is not None:
+            self.frames.reset(seed)
         q0 = options.get("portal")
         if q0 is None:
             q0 = self._start_pose()

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..model.compiler import CompiledTask
 from ..spec.images import DEPTH_MM_PER_LEVEL, SEGMENTATION_CLASSES, SEGMENTATION_STEP, Image
+from .looks import RandomLooks
 
 _OPTION = mujoco.MjvOption()
 _OPTION.geomgroup[3] = 0  # the scope's internal masses around the camera
@@ -50,7 +51,9 @@ class EndoscopeFrames:
         self.camera = task.camera
         half = math.radians(0.5 * model.cam_fovy[self.camera])
         self.cos_half = math.cos(math.atan(math.tan(half) * math.sqrt(2.0)))  # the square frame's corners
-        self.classes = segmentation_classes(model, task) if image.kind == "segmentation" else None
+        needs = image.kind == "segmentation" or image.looks is not None
+        self.classes = segmentation_classes(model, task) if needs else None
+        self.looks = None if image.looks is None else RandomLooks(model=model, classes=self.classes, looks=image.looks)
         self.shape = (image.size, image.size, image.channels * image.stack)
         self.frames = np.zeros(self.shape, np.uint8)
         self.renderer: mujoco.Renderer | None = None  # made on first use: in the process that steps the env
@@ -92,9 +95,16 @@ class EndoscopeFrames:
         labels = np.where(is_geom, classes[np.where(is_geom, ids, 0)], 0)
         return (labels * SEGMENTATION_STEP).astype(np.uint8)[:, :, None]
 
+    def reset(self, seed: int | None) -> None:
+        """A new episode: draw its looks, if the spec randomises them."""
+        if self.looks is not None:
+            self.looks.reset(seed)
+
     def observe(self, data: mujoco.MjData, subtask: int, first: bool) -> np.ndarray:
         """Render, push the frame onto the stack (filling it at an episode's start) and return a copy."""
         f = self.frame(data, subtask)
+        if self.looks is not None:
+            f = self.looks.corrupt(f)
         c = f.shape[2]
         if first:
             self.frames[:] = np.tile(f, (1, 1, self.image.stack))

@@ -22,6 +22,17 @@ SEGMENTATION_CLASSES = (  # segmentation frames: class k is the level k * SEGMEN
 SEGMENTATION_STEP = 32
 
 
+class Looks(Strict):
+    """Randomised looks, drawn per episode: so a pixel policy survives a dome that looks different."""
+
+    colour: float = Field(
+        0.0, ge=0, le=1, description="each RGB channel of plate, shell and line moves by up to this (0: as compiled)"
+    )
+    light: float = Field(0.0, ge=0, lt=1, description="headlight and scope light scaled by 1 +- up to this")
+    noise: float = Field(0.0, ge=0, le=64, description="standard deviation of Gaussian pixel noise, in levels")
+    blur: float = Field(0.0, ge=0, le=1, description="share of episodes whose frames are blurred (3 x 3 box)")
+
+
 class Image(Strict):
     """Endoscope frames as the observation: uint8 height x width x channels, rendered where the env steps."""
 
@@ -33,6 +44,7 @@ class Image(Strict):
         "5 its up mark, 6 other avatars, 7 instruments)",
     )
     stack: int = Field(1, ge=1, le=8, description="the last frames stacked along the channels, newest last")
+    looks: Looks | None = Field(None, description="randomised colours, lighting, noise and blur (none: as compiled)")
     state: bool = Field(
         False,
         description="true: a Dict of `image` and the kinematic `state` (the terms above, not normalised); "
