@@ -85,3 +85,25 @@ def test_pixel_spec_sees_no_kinematic_state():
     env = FastEnv(spec)
     assert isinstance(env.observation_space, spaces.Box) and env.observation_space.dtype == np.uint8
     assert env.observation_space.shape == (48, 48, 6)
+
+
+def test_pixel_sac_learns_a_few_steps_and_its_buffer_is_bounded():
+    from fastrl.agents.sb3 import build_model, make_vec_env
+    from fastrl.spec import SpecError
+
+    base = ["train.algo=SAC", "actions.mode=rates", "observation.image.size=32"]
+    try:
+        load_spec(PIXELS, base)  # 300k frames of 32 x 32 x 6, twice: 3.7 GB, under the limit
+        load_spec(PIXELS, [*base, "observation.image.size=48"])
+    except SpecError as e:
+        assert "GB of memory" in str(e)
+    else:
+        raise AssertionError("an 8 GB replay buffer of frames was accepted")
+    small = [*base, "train.sac.buffer_size=1000", "train.sac.learning_starts=32", "train.sac.batch_size=16"]
+    spec = load_spec(PIXELS, [*small, "train.n_envs=2"])
+    venv = make_vec_env(spec, 2, 0, workers=1)
+    model = build_model(spec, venv)
+    assert isinstance(model.policy.actor.features_extractor, PixelEncoder)
+    model.learn(64)
+    assert model.num_timesteps == 64 and model.replay_buffer.observations.dtype == np.uint8
+    venv.close()
