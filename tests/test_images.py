@@ -119,6 +119,7 @@ def test_kinematic_specs_keep_their_hashes_and_images_change_only_spec_hash():
         (["observation.image.kind=infrared"], "observation.image.kind"),
         (["observation.image.stack=0"], "observation.image.stack"),
         (["observation.image.size=32", "irl.algorithm=gail"], "irl.algorithm"),
+        (["observation.image.size=32", "irl.algorithm=airl"], "irl.algorithm"),
     ],
 )
 def test_bad_image_settings_name_their_field(sets, field):

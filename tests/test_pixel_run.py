@@ -107,3 +107,36 @@ def test_pixel_sac_learns_a_few_steps_and_its_buffer_is_bounded():
     model.learn(64)
     assert model.num_timesteps == 64 and model.replay_buffer.observations.dtype == np.uint8
     venv.close()
+
+
+def test_behaviour_cloning_fits_a_pixel_policy_to_expert_frames(tmp_path):
+    args = [
+        "run",
+        str(PIXELS),
+        *[a for kv in TINY for a in ("--set", kv)],
+        *("--set", "irl.algorithm=bc", "--set", "irl.demonstrations.expert=2", "--set", "irl.bc.epochs=3"),
+    ]
+    res = CliRunner().invoke(app, [*args, "--runs", str(tmp_path), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    run = only_run(tmp_path)
+    assert len(list((run / "demos").glob("*.npz"))) == 2
+    assert json.loads((run / "meta.json").read_text())["status"] == "done"
+    assert "1 file verified" in rrd_verify(run / "recording.rrd")
+
+
+def test_cloning_loss_falls_on_frames(tmp_path):
+    from fastrl.agents.bc import behaviour_clone
+    from fastrl.agents.sb3 import build_model, make_vec_env
+    from fastrl.data.recordings import load_recordings
+    from fastrl.data.replay import demonstration_pairs
+    from fastrl.model.scope import joint_ranges
+    from fastrl.runner.demos import write_demos
+
+    spec = load_spec(PIXELS, ["observation.image.size=32", "train.n_envs=1"])
+    write_demos(tmp_path, 2, 0, expert_spec=spec, progress=False)
+    named, _ = load_recordings([tmp_path], joint_ranges(spec.scope))
+    obs, actions = demonstration_pairs(FastEnv(spec), [t for _, t in named])
+    assert obs.shape[1:] == (32, 32, 6) and obs.dtype == np.uint8 and len(obs) == len(actions)
+    model = build_model(spec, make_vec_env(spec, 1, 0, workers=1))
+    losses = behaviour_clone(model, model.get_env(), obs, actions, epochs=8, batch_size=64, lr=1e-3)
+    assert losses[-1] < 0.85 * losses[0] and losses == sorted(losses, reverse=True), losses

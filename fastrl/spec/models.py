@@ -213,11 +213,11 @@ class TaskSpec(Strict):
                     f"{self.train.sac.buffer_size:,} transitions of {frame:,}-byte frames take {gb:.1f} GB of "
                     f"memory, more than {MAX_REPLAY_GB} GB: lower buffer_size or the image's size or stack",
                 )
-        if self.irl.algorithm != "none" and self.observation.image is not None:
+        if self.irl.algorithm in ("gail", "airl") and self.observation.image is not None:
             _fail(
                 "irl.algorithm",
-                "learning from demonstrations needs the kinematic observation: remove observation.image "
-                "(pixel policies learn from the spec's reward)",
+                "GAIL and AIRL need the kinematic observation: remove observation.image (pixel policies learn "
+                "from the spec's reward, or clone demonstrations: bc)",
             )
         observed = self.observation.terms()
         _raise(
