@@ -140,3 +140,28 @@ def test_cloning_loss_falls_on_frames(tmp_path):
     model = build_model(spec, make_vec_env(spec, 1, 0, workers=1))
     losses = behaviour_clone(model, model.get_env(), obs, actions, epochs=8, batch_size=64, lr=1e-3)
     assert losses[-1] < 0.85 * losses[0] and losses == sorted(losses, reverse=True), losses
+
+
+def test_image_workers_start_fresh_after_this_process_rendered():
+    """A worker forked after this process made an EGL context would hang at its first frame (Mesa)."""
+    import signal
+
+    from fastrl.agents.sb3 import make_vec_env
+
+    spec = load_spec(PIXELS, ["observation.image.size=32"])
+    FastEnv(spec).reset(seed=0)  # this process now holds a GL context
+    venv = make_vec_env(spec, 4, 0, workers=2)
+
+    def stuck(*_):
+        raise TimeoutError("a worker did not answer within 120 s")
+
+    old = signal.signal(signal.SIGALRM, stuck)
+    signal.alarm(120)
+    try:
+        obs = venv.reset()
+        obs, *_ = venv.step(np.zeros(4, int))
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+        venv.close()
+    assert obs.shape == (4, 32, 32, 6) and obs[2:].std() > 0  # the worker's envs rendered

@@ -6,6 +6,7 @@ import hashlib
 import json
 import os
 import shutil
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +37,8 @@ def make_vec_env(spec: TaskSpec, n_envs: int, seed: int, workers: int = 1, late_
     """
     processes = min(workers, n_envs, os.cpu_count() or 1)
     if processes > 1:
-        venv = SplitVecEnv(make_env=lambda: FastEnv(spec, late_starts=late_starts), n_envs=n_envs, processes=processes)
+        make = partial(FastEnv, spec, late_starts=late_starts)  # pickles: image workers start from a fresh process
+        venv = SplitVecEnv(make_env=make, n_envs=n_envs, processes=processes, fork=spec.observation.image is None)
     else:
         venv = FreshInfoVecEnv([lambda: FastEnv(spec, late_starts=late_starts) for _ in range(n_envs)])
     venv.seed(seed)
