@@ -11,23 +11,19 @@ from torch.nn import functional as F
 
 def random_shift(x: torch.Tensor, pad: int) -> torch.Tensor:
     """Each image moved by a random whole number of pixels up to `pad` each way, edges repeated (DrQ)."""
-    n, c, h, w = x.shape
+    n, _, h, w = x.shape
     padded = F.pad(x, (pad, pad, pad, pad), mode="replicate")
-    dy = torch.randint(0, 2 * pad + 1, (n, 1, 1, 1), device=x.device)
-    dx = torch.randint(0, 2 * pad + 1, (n, 1, 1, 1), device=x.device)
-    rows = dy + torch.arange(h, device=x.device).view(1, 1, h, 1)
-    cols = dx + torch.arange(w, device=x.device).view(1, 1, 1, w)
-    batch = torch.arange(n, device=x.device).view(n, 1, 1, 1)
-    channel = torch.arange(c, device=x.device).view(1, c, 1, 1)
-    return padded[batch, channel, rows, cols]
+    offsets = torch.randint(0, 2 * pad + 1, (n, 2)).tolist()  # slices: 2x faster than one gather on a CPU
+    return torch.stack([padded[i, :, dy : dy + h, dx : dx + w] for i, (dy, dx) in enumerate(offsets)])
 
 
 def conv_stack(channels: int) -> nn.Sequential:
-    """Three stride-2 3x3 convolutions (32 filters each): a 48 px frame becomes 32 x 6 x 6."""
+    """A 5x5 stride-3 and a 3x3 stride-2 convolution, 32 filters each: a 48 px frame becomes 32 x 8 x 8.
+
+    On one CPU thread its forward and backward cost a third of three stride-2 3x3 layers' (bench/pixel_throughput.py).
+    """
     return nn.Sequential(
-        nn.Conv2d(channels, 32, 3, stride=2, padding=1),
-        nn.ReLU(),
-        nn.Conv2d(32, 32, 3, stride=2, padding=1),
+        nn.Conv2d(channels, 32, 5, stride=3, padding=1),
         nn.ReLU(),
         nn.Conv2d(32, 32, 3, stride=2, padding=1),
         nn.ReLU(),
