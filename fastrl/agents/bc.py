@@ -30,25 +30,26 @@ def behaviour_clone(
     """Maximise the policy's log-likelihood of the demonstrated actions; return the mean loss per epoch."""
     normalize_from_data(venv, observations)
     x = venv.normalize_obs(observations) if isinstance(venv, VecNormalize) else observations
-    obs_t = torch.as_tensor(x, dtype=torch.float32)
-    act_t = torch.as_tensor(actions)
     policy = model.policy
+    obs_t, _ = policy.obs_to_tensor(x)  # frames channels first, as the policy takes them (it scales them to floats)
+    act_t = torch.as_tensor(actions)
     optim = torch.optim.Adam(policy.parameters(), lr=lr)
     rng = np.random.default_rng(seed)
     losses = []
     policy.set_training_mode(True)
     for _ in range(epochs):
-        order = rng.permutation(len(obs_t))
+        order = rng.permutation(len(act_t))
         total = 0.0
         for start in range(0, len(order), batch_size):
             idx = torch.as_tensor(order[start : start + batch_size])
-            _, log_prob, entropy = policy.evaluate_actions(obs_t[idx], act_t[idx])
+            batch = {k: v[idx] for k, v in obs_t.items()} if isinstance(obs_t, dict) else obs_t[idx]
+            _, log_prob, entropy = policy.evaluate_actions(batch, act_t[idx])
             loss = -log_prob.mean() - 1e-3 * (entropy.mean() if entropy is not None else 0.0)
             optim.zero_grad()
             loss.backward()
             optim.step()
             total += float(loss.detach()) * len(idx)
-        losses.append(total / len(obs_t))
+        losses.append(total / len(act_t))
     policy.set_training_mode(False)
     return losses
 

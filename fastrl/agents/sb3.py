@@ -6,6 +6,7 @@ import hashlib
 import json
 import os
 import shutil
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,8 @@ from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 from ..atomic import DiskFull, atomic_write, fsync_dir, is_disk_full, write_json
 from ..env.fast_env import FastEnv
 from ..spec.models import TaskSpec
+from ..spec.training import Encoder
+from .encoder import PixelEncoder
 from .lean_sac import LeanSAC
 from .workers import FreshInfoVecEnv, SplitVecEnv
 
@@ -34,15 +37,17 @@ def make_vec_env(spec: TaskSpec, n_envs: int, seed: int, workers: int = 1, late_
     """
     processes = min(workers, n_envs, os.cpu_count() or 1)
     if processes > 1:
-        venv = SplitVecEnv(make_env=lambda: FastEnv(spec, late_starts=late_starts), n_envs=n_envs, processes=processes)
+        make = partial(FastEnv, spec, late_starts=late_starts)  # pickles: image workers start from a fresh process
+        venv = SplitVecEnv(make_env=make, n_envs=n_envs, processes=processes, fork=spec.observation.image is None)
     else:
         venv = FreshInfoVecEnv([lambda: FastEnv(spec, late_starts=late_starts) for _ in range(n_envs)])
     venv.seed(seed)
     train = spec.learning()
     norm = train.normalize
     norm_reward = norm.reward and not spec.irl.enabled
-    if norm.obs or norm_reward:
-        venv = VecNormalize(venv, norm_obs=norm.obs, norm_reward=norm_reward, gamma=train.params().gamma)
+    norm_obs = norm.obs and spec.observation.image is None  # frames are scaled by the policy; a Dict's state not
+    if norm_obs or norm_reward:
+        venv = VecNormalize(venv, norm_obs=norm_obs, norm_reward=norm_reward, gamma=train.params().gamma)
     return venv
 
 
@@ -56,13 +61,20 @@ def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) 
     arch = {"pi": net, kind.critic: net}
     algo = LeanSAC if params.pop("lean_update", False) else ALGOS[kind.name]
     torch.set_num_threads(1)
+    policy, policy_kwargs = "MlpPolicy", {"net_arch": arch, "activation_fn": act}
+    image = spec.observation.image
+    if image is not None:
+        enc = train.encoder or Encoder()
+        policy = "MultiInputPolicy" if image.state else "CnnPolicy"
+        extractor = {"features": enc.features, "shift": enc.shift}
+        policy_kwargs |= {"features_extractor_class": PixelEncoder, "features_extractor_kwargs": extractor}
     return algo(
-        "MlpPolicy",
+        policy,
         venv,
         seed=train.seed if seed is None else seed,
         verbose=0,
         device="cpu",
-        policy_kwargs={"net_arch": arch, "activation_fn": act},
+        policy_kwargs=policy_kwargs,
         **params,
     )
 
@@ -99,14 +111,9 @@ def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict,
             saved = {name: part.state_dict() for name, part in parts.items()}
             atomic_write(tmp / "parts.pt", lambda f: torch.save(saved, f))
         if isinstance(venv, VecNormalize):
-            stats = {
-                "obs_mean": venv.obs_rms.mean,
-                "obs_var": venv.obs_rms.var,
-                "obs_count": venv.obs_rms.count,
-                "ret_mean": venv.ret_rms.mean,
-                "ret_var": venv.ret_rms.var,
-                "ret_count": venv.ret_rms.count,
-            }
+            stats = {"ret_mean": venv.ret_rms.mean, "ret_var": venv.ret_rms.var, "ret_count": venv.ret_rms.count}
+            if venv.norm_obs:  # not for image observations (the policy scales the frames)
+                stats |= {"obs_mean": venv.obs_rms.mean, "obs_var": venv.obs_rms.var, "obs_count": venv.obs_rms.count}
             atomic_write(tmp / "normalize.npz", lambda f: np.savez(f, **stats))
         files = {p.name: file_sha256(p) for p in sorted(tmp.iterdir())}
         write_json(tmp / "state.json", {**state, "timesteps": int(model.num_timesteps), "files": files})
@@ -197,7 +204,9 @@ def load_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv | None, parts
     stats = path / "normalize.npz"
     if isinstance(venv, VecNormalize) and stats.exists():
         z = np.load(stats)
-        venv.obs_rms.mean, venv.obs_rms.var, venv.obs_rms.count = z["obs_mean"], z["obs_var"], float(z["obs_count"])
+        if venv.norm_obs:
+            venv.obs_rms.mean, venv.obs_rms.var = z["obs_mean"], z["obs_var"]
+            venv.obs_rms.count = float(z["obs_count"])
         venv.ret_rms.mean, venv.ret_rms.var, venv.ret_rms.count = z["ret_mean"], z["ret_var"], float(z["ret_count"])
     state = json.loads((path / "state.json").read_text())
     model.num_timesteps = int(state["timesteps"])
@@ -210,7 +219,8 @@ def policy_function(model: BaseAlgorithm, venv: VecEnv | None):
     norm = venv if isinstance(venv, VecNormalize) and venv.norm_obs else None
 
     def act(obs):
-        x = norm.normalize_obs(obs[None]) if norm is not None else obs[None]
+        one = {k: v[None] for k, v in obs.items()} if isinstance(obs, dict) else obs[None]  # a Dict's image and state
+        x = norm.normalize_obs(one) if norm is not None else one
         action, _ = model.predict(x, deterministic=True)
         return action[0] if action.ndim > 1 else int(action[0])
 

@@ -76,11 +76,14 @@ class SplitVecEnv(VecEnv):
     and exit when the pipe to this process closes.
     """
 
-    def __init__(self, *, make_env: Callable[[], gym.Env], n_envs: int, processes: int):
+    def __init__(self, *, make_env: Callable[[], gym.Env], n_envs: int, processes: int, fork: bool = True):
+        """`fork: false` starts workers from a fresh process (forkserver or spawn; `make_env` must pickle): a child
+        forked after this process rendered would deadlock in Mesa's EGL as soon as it rendered itself."""
         batches = [len(b) for b in np.array_split(np.arange(n_envs), max(1, min(processes, n_envs)))]
         self.local = FreshInfoVecEnv([make_env for _ in range(batches[0])])
         methods = mp.get_all_start_methods()
-        ctx = mp.get_context("fork" if "fork" in methods else "spawn")
+        fresh = "forkserver" if "forkserver" in methods else "spawn"
+        ctx = mp.get_context("fork" if fork and "fork" in methods else fresh)
         self.batches, self.pipes, self.procs = batches, [], []
         for n in batches[1:]:
             parent, child = ctx.Pipe()

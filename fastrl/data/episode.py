@@ -24,6 +24,7 @@ class EpisodeRecord:
     contacts: np.ndarray  # (T+1,) number of tip contacts
     actions: np.ndarray | None = None  # (T, ...) actions taken
     images: dict[int, np.ndarray] = field(default_factory=dict)  # step -> endoscope image (H, W, 3) uint8
+    frames: dict[int, np.ndarray] = field(default_factory=dict)  # step -> the policy's frames side by side, uint8
     subtasks_total: int = 0
     success: bool = False
     tools: np.ndarray | None = None  # (T+1, n, 2, 3) each instrument's tip and shaft end, if the task has any

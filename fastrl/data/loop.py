@@ -69,6 +69,7 @@ class EpisodeRecorder:
         self.tool_ends = [(t.tip_body, t.spec.shaft_length) for t in self.u.task.instruments]
         self.bodies: list[np.ndarray] = []
         self.images: dict[int, np.ndarray] = {}
+        self.frames: dict[int, np.ndarray] = {}  # what a pixel policy saw, at the same steps as the images
 
     def snapshot(self, reward: float, info: dict) -> int:
         """Keep the env's current state; return its step index."""
@@ -98,6 +99,8 @@ class EpisodeRecorder:
         step = len(self.rows) - 1
         if self.image_every and step % self.image_every == 0:
             self.images[step] = self.image(u)
+            if getattr(u, "frames", None) is not None:
+                self.frames[step] = policy_strip(u.frames.frames, u.task_spec.observation.image.channels)
         return step
 
     def record(self, seed: int, actions: np.ndarray | None, info: dict) -> EpisodeRecord:
@@ -119,8 +122,17 @@ class EpisodeRecorder:
             contacts=np.array(cols[9]),
             actions=actions,
             images=self.images,
+            frames=self.frames,
             subtasks_total=info["subtasks_total"],
             success=bool(info["success"]),
             tools=np.array(self.tools) if self.tools else None,
             bodies=np.array(self.bodies) if self.bodies else None,
         )
+
+
+def policy_strip(stack: np.ndarray, channels: int) -> np.ndarray:
+    """A frame stack (H, W, C * k) as its k frames side by side, oldest first: (H, k * W, C), or (H, k * W) grey."""
+    h, w, total = stack.shape
+    k = total // channels
+    strip = stack.reshape(h, w, k, channels).transpose(0, 2, 1, 3).reshape(h, k * w, channels)
+    return strip[:, :, 0].copy() if channels == 1 else strip

@@ -16,6 +16,7 @@ from ..spec.models import TaskSpec
 from ..terms import OBSERVATION_TERMS, REWARD_FEATURES, TaskState
 from .actions import ContinuousActions, DiscreteActions, RateActions
 from .cues import cue_checks, cue_green, update_dwell
+from .images import EndoscopeFrames
 from .loose_sensing import LooseBodies
 from .sensing import Sensor
 from .tool_actions import ToolActions
@@ -70,7 +71,14 @@ class FastEnv(gym.Env):
         coords = [i.coordinates for i in spec.instruments]
         self.obs_dim = sum(OBSERVATION_TERMS[n].width(coords) for n in spec.observation.terms())
         self.stack = spec.observation.stack
-        self.observation_space = spaces.Box(-np.inf, np.inf, (self.obs_dim * self.stack,), np.float32)
+        state_space = spaces.Box(-np.inf, np.inf, (self.obs_dim * self.stack,), np.float32)
+        image = spec.observation.image
+        self.frames = None if image is None else EndoscopeFrames(task=self.task, model=self.model, image=image)
+        if self.frames is None:
+            self.observation_space = state_space
+        else:
+            pixels = spaces.Box(0, 255, self.frames.shape, np.uint8)
+            self.observation_space = spaces.Dict({"image": pixels, "state": state_space}) if image.state else pixels
         rays = any("rays" in REWARD_FEATURES[n].needs for n in self.feature_names)
         self.sensor = Sensor(self.task, rays)
         self.sensor.bind(self.data)
@@ -93,6 +101,8 @@ class FastEnv(gym.Env):
         super().reset(seed=seed)
         options = options or {}
         self._reset_targets(jitter=True)
+        if self.frames is not None:
+            self.frames.reset(seed)
         q0 = options.get("portal")
         if q0 is None:
             q0 = self._start_pose()
@@ -151,7 +161,9 @@ class FastEnv(gym.Env):
         return self.render_views(outside=False)["endoscope"]
 
     def close(self):
-        """Free the renderer."""
+        """Free the renderers."""
+        if self.frames is not None:
+            self.frames.close()
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
@@ -198,11 +210,10 @@ class FastEnv(gym.Env):
         """Servo targets to the current pose: the scope stays where an outside force (a mouse pull) left it."""
         self.target = self.portal_coordinates().tolist() + self.target[5:]
 
-    def observation(self) -> np.ndarray:
-        """The current observation, without advancing the frame stack."""
-        if self.stack == 1:
-            return self._observe()
-        return self._frames.reshape(-1).copy()
+    def observation(self):
+        """The current observation, without advancing the frame stacks."""
+        state = self._state() if self.stack == 1 else self._frames.reshape(-1).copy()
+        return state if self.frames is None else self._with_image(state, self.frames.frames.copy())
 
     def copy_state_from(self, other: FastEnv) -> None:
         """Continue from another env of the same task: physics, servo targets, cue state, avatars, frames."""
@@ -213,6 +224,8 @@ class FastEnv(gym.Env):
         self.target = list(other.target)
         self._positions_only = other._positions_only
         self._frames[:] = other._frames
+        if self.frames is not None:
+            self.frames.frames[:] = other.frames.frames
         for name in ("t_pos", "t_fwd", "t_up", "t_quat"):
             getattr(self, name)[:] = getattr(other, name)
         if hasattr(other.actions, "twist"):
@@ -252,21 +265,33 @@ class FastEnv(gym.Env):
         truncated = not terminated and self.steps >= self.max_steps
         return self._observe(), reward, terminated, truncated, self._info(vals)
 
-    def _observe(self, first: bool = False) -> np.ndarray:
-        """Concatenate the observation terms; stack frames if asked."""
+    def _observe(self, first: bool = False):
+        """Concatenate the observation terms and stack them if asked; with images, render and stack a frame."""
+        frame = self._state()
+        if self.stack == 1:
+            state = frame
+        else:
+            if first:
+                self._frames[:] = frame
+            else:
+                self._frames[:-1] = self._frames[1:]
+                self._frames[-1] = frame
+            state = self._frames.reshape(-1).copy()
+        if self.frames is None:
+            return state
+        return self._with_image(state, self.frames.observe(self.data, self.done_count, first))
+
+    def _state(self) -> np.ndarray:
+        """The observation terms of the current state, concatenated."""
         s = self.state
         values = []
         for f in self.obs_fns:
             values.extend(f(s))
-        frame = np.array(values, np.float32)
-        if self.stack == 1:
-            return frame
-        if first:
-            self._frames[:] = frame
-        else:
-            self._frames[:-1] = self._frames[1:]
-            self._frames[-1] = frame
-        return self._frames.reshape(-1).copy()
+        return np.array(values, np.float32)
+
+    def _with_image(self, state: np.ndarray, image: np.ndarray):
+        """The image alone, or a Dict of image and state, as the spec asks."""
+        return {"image": image, "state": state} if self.task_spec.observation.image.state else image
 
     def _info(self, vals: list) -> dict:
         """Per-step info: features, subtask, cue, success."""

@@ -43,6 +43,7 @@ def log_episode(
     scene = index + _trained_at(timesteps, len(steps))
     _log_scope(rec, world, ep, scene, task.spec.scope.diameter)
     _log_camera(rec, world, ep, scene, fov_deg, image_size, timesteps)
+    _log_frames(rec, world, ep, timesteps)
     _log_path(rec, world, ep)
     log_instruments(rec, world, ep, scene, task)
     _log_cue(rec, world, ep, scene, task)
@@ -110,6 +111,28 @@ def _log_camera(rec, world: str, ep: EpisodeRecord, index: list, fov_deg: float,
     rec.send_columns(
         image,
         indexes=img_index,
+        columns=rr.Image.columns(buffer=frames.reshape(len(keys), -1), format=[fmt] * len(keys)),
+    )
+
+
+def _log_frames(rec, world: str, ep: EpisodeRecord, timesteps=None) -> None:
+    """What a pixel policy saw (its stacked frames side by side) at `world/policy`, on the images' steps."""
+    if not ep.frames:
+        return
+    keys = sorted(ep.frames)
+    frames = np.stack([ep.frames[k] for k in keys])
+    h, w = frames.shape[1:3]
+    model = "RGB" if frames.ndim == 4 else "L"
+    fmt = rr.components.ImageFormat(width=w, height=h, color_model=model, channel_datatype="U8")
+    at = np.asarray(keys)
+    index = [
+        rr.TimeColumn("step", sequence=at),
+        rr.TimeColumn("sim_time", duration=np.asarray(ep.time)[at]),
+        *_trained_at(timesteps, len(at)),
+    ]
+    rec.send_columns(
+        f"{world}/policy",
+        indexes=index,
         columns=rr.Image.columns(buffer=frames.reshape(len(keys), -1), format=[fmt] * len(keys)),
     )
 

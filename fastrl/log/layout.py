@@ -48,6 +48,7 @@ def run_blueprint(
     timeline: str | None = None,
     irl: bool = False,
     curves: bool = True,
+    pixels: bool = False,
 ) -> rrb.Blueprint:
     """3D scene + episode `focus`, its endoscope image and reward features, training, summary.
 
@@ -92,7 +93,10 @@ def run_blueprint(
         f"reward features: {ep} (step), training (timesteps)",
         ["+ $origin/**", "+ /metrics/train/features/**"],
     )
-    left = rrb.Vertical(scene, rrb.Horizontal(image, summary), row_shares=[2, 1])
+    below = (
+        [image, rrb.Spatial2DView(origin=f"/world/eval/{ep}/policy", name=f"policy frames {ep}")] if pixels else [image]
+    )
+    left = rrb.Vertical(scene, rrb.Horizontal(*below, summary), row_shares=[2, 1])
     right = rrb.Vertical(reward, features, training, row_shares=[3, 6, 4])
     default = "timesteps" if curves else "step"
     return _blueprint(rrb.Horizontal(left, right, column_shares=[3, 2]), timeline or default)

@@ -101,9 +101,9 @@ class RunRecorder:
             static=True,
         )
 
-    def send_blueprint(self, n_episodes: int, irl: bool = False, curves: bool = True) -> None:
-        """Send the layout the viewer opens with (scene + episode 0, image, curves, summary)."""
-        blueprint = run_blueprint(n_episodes, eye=self.eye, irl=irl, curves=curves)
+    def send_blueprint(self, n_episodes: int, irl: bool = False, curves: bool = True, pixels: bool = False) -> None:
+        """Send the layout the viewer opens with (scene + episode 0, image, the policy's frames, curves, summary)."""
+        blueprint = run_blueprint(n_episodes, eye=self.eye, irl=irl, curves=curves, pixels=pixels)
         self.rec.send_blueprint(blueprint, make_active=True, make_default=True)
 
     def flush(self) -> None:

@@ -69,15 +69,16 @@ def evaluate_batched(envs: list, act: Callable[[np.ndarray], np.ndarray], seeds:
     `act` maps a batch of observations to a batch of actions; `envs` needs at least as many envs as seeds.
     """
     live = list(range(len(seeds)))
-    obs = np.stack([envs[i].reset(seed=s)[0] for i, s in enumerate(seeds)])
+    obs = stack_observations([envs[i].reset(seed=s)[0] for i, s in enumerate(seeds)])
     returns, subtasks, success, times = np.zeros(len(seeds)), np.zeros(len(seeds)), np.zeros(len(seeds)), {}
     while live:
-        actions = act(obs[live])
+        actions = act({k: v[live] for k, v in obs.items()} if isinstance(obs, dict) else obs[live])
         still = []
         for i, action in zip(live, actions):
             o, reward, term, trunc, info = envs[i].step(action)
             returns[i] += reward
-            obs[i] = o
+            for part, value in obs.items() if isinstance(obs, dict) else [(None, obs)]:
+                value[i] = o if part is None else o[part]
             if term or trunc:
                 subtasks[i] = info["subtask"] / max(1, info["subtasks_total"])
                 success[i] = float(info["success"])
@@ -91,3 +92,10 @@ def evaluate_batched(envs: list, act: Callable[[np.ndarray], np.ndarray], seeds:
         "return_mean": float(returns.mean()),
         "episode_time_mean": float(np.mean(list(times.values()))),
     }
+
+
+def stack_observations(observations: list):
+    """Observations as one batch: an array, or a Dict's parts each stacked."""
+    if isinstance(observations[0], dict):
+        return {k: np.stack([o[k] for o in observations]) for k in observations[0]}
+    return np.stack(observations)

@@ -100,7 +100,8 @@ def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resumed_at: in
     recorder = RunRecorder(path, recording_id=run.name, run_name=f"{spec.name} {run.name}")
     recorder.log_scene(task)
     n = min(spec.evaluate.record_episodes, spec.evaluate.episodes)
-    recorder.send_blueprint(n, spec.irl.enabled, curves=spec.irl.algorithm != "bc")  # BC logs no curves
+    pixels = spec.observation.image is not None
+    recorder.send_blueprint(n, spec.irl.enabled, curves=spec.irl.algorithm != "bc", pixels=pixels)  # BC: no curves
     if resumed_at is not None:
         history = metrics_until(run / "metrics.jsonl", resumed_at)
         if history:
@@ -239,7 +240,8 @@ def _stages(
     state = {"episodes": monitor.episodes, "train_seconds": seconds, "stopped_early": monitor.stopped_early}
     save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state, learner.parts)
     save_checkpoint(run / "final", model, venv, state, learner.parts)
-    save_networks(run / "networks", model, venv, learner.disc, spec.learning().params().gamma, learner.snapshots)
+    if spec.observation.image is None:  # the safetensors export holds MLPs: a pixel policy stays in final/
+        save_networks(run / "networks", model, venv, learner.disc, spec.learning().params().gamma, learner.snapshots)
     update_meta(
         run,
         status="evaluating",
@@ -315,12 +317,22 @@ def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: 
 
 
 def expert_summary(spec: TaskSpec, seeds: list[int]) -> dict:
-    """The scripted expert's evaluation figures on the given seeds (no images, no recording)."""
-    env = FastEnv(spec)
+    """The scripted expert's evaluation figures on the given seeds (no images, no recording).
+
+    The expert acts on the task's state, so it goes without image observations: rendering in a child forked
+    after this process rendered (the evaluation during training) would deadlock in Mesa's EGL."""
+    env = FastEnv(without_images(spec))
     expert = ScriptedExpert(env)
     summary, _ = evaluate(env, expert.act, seeds, on_reset=expert.reset)
     env.close()
     return summary
+
+
+def without_images(spec: TaskSpec) -> TaskSpec:
+    """The spec with the kinematic observation alone."""
+    if spec.observation.image is None:
+        return spec
+    return spec.model_copy(update={"observation": spec.observation.model_copy(update={"image": None})})
 
 
 def evaluate_saved(run: Path, episodes: int | None = None) -> dict:

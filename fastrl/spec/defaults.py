@@ -58,6 +58,9 @@ def canonical_dump(spec) -> dict:
     """The spec as JSON data with every algorithm-dependent field that holds its default written as null, so a spec
     hashes the same whether it was resolved or not (old runs and trajectories keep their spec_hash)."""
     data = drop_unused_extensions(spec.model_dump(mode="json"))
+    for section, key in (("observation", "image"), ("train", "encoder")):  # added later: specs without images
+        if data[section][key] is None:  # keep their hash
+            del data[section][key]
     if data["train"]["sac"]["periodic_every"] is None:  # added later: specs without it keep their hash
         del data["train"]["sac"]["periodic_every"]
     generator = data["irl"]["generator"]

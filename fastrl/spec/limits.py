@@ -14,6 +14,7 @@ MAX_YAML_NODES = 100_000  # values after expanding every alias (*name): stops "b
 MAX_INT = 2**63 - 1  # integers beyond this do not fit numpy, torch or MuJoCo
 MAX_LINE_POINTS = 100  # task.line.points (a shipped line has 4)
 MAX_SUBTASKS = 500  # avatars, landmarks, or avatars placed along the line
+MAX_REPLAY_GB = 4  # memory of SAC's replay buffer of image observations
 MAX_EPISODE_STEPS = 1_000_000  # episode.time_limit * episode.control_hz
 MAX_SECONDS = 86_400  # episode.time_limit, and the time span of a trajectory or pose session
 MIN_TIME_STEP = 1e-6  # s between trajectory samples

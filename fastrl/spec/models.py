@@ -16,7 +16,7 @@ from .defaults import resolve_defaults
 from .experiment import Experiment
 from .instruments import Instrument, instrument_errors
 from .irl import IRL, late_starts, learning_train, starts_cloned
-from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_SECONDS, MAX_SUBTASKS
+from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_REPLAY_GB, MAX_SECONDS, MAX_SUBTASKS
 from .loose import Cup, LooseBody, loose_errors
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
 from .shaft import Shaft
@@ -204,6 +204,22 @@ class TaskSpec(Strict):
             )
         if self.irl.algorithm == "bc" and kind.off_policy:
             _fail("irl.algorithm", "behavioural cloning trains the PPO policy: set train.algo: PPO")
+        image = self.observation.image
+        if image is not None and kind.off_policy:
+            frame = image.size * image.size * image.channels * image.stack
+            gb = 2 * frame * self.train.sac.buffer_size / 1e9  # SB3 keeps each observation and the next
+            if gb > MAX_REPLAY_GB:
+                _fail(
+                    "train.sac.buffer_size",
+                    f"{self.train.sac.buffer_size:,} transitions of {frame:,}-byte frames take {gb:.1f} GB of "
+                    f"memory, more than {MAX_REPLAY_GB} GB: lower buffer_size or the image's size or stack",
+                )
+        if self.irl.algorithm in ("gail", "airl") and self.observation.image is not None:
+            _fail(
+                "irl.algorithm",
+                "GAIL and AIRL need the kinematic observation: remove observation.image (pixel policies learn "
+                "from the spec's reward, or clone demonstrations: bc)",
+            )
         observed = self.observation.terms()
         _raise(
             [

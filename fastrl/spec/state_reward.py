@@ -8,6 +8,7 @@ from pydantic import Field, model_validator
 
 from ..terms import OBSERVATION_TERMS, REWARD_FEATURES
 from .base import Strict, _raise
+from .images import Image
 
 
 class Observation(Strict):
@@ -23,6 +24,7 @@ class Observation(Strict):
     egocentric: bool = False
     extra: list[str] = []
     stack: int = Field(1, ge=1, le=16)
+    image: Image | None = Field(None, description="endoscope frames as the observation (none: the state alone)")
 
     @model_validator(mode="after")
     def _known(self):

@@ -81,6 +81,16 @@ class Normalize(BaseModel):
     )
 
 
+class Encoder(BaseModel):
+    """The CNN that reads observation.image: its output width and DrQ's random shift while training."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+    features: int = Field(64, ge=8, le=1024, description="width of the CNN's output (the state is appended to it)")
+    shift: int = Field(
+        4, ge=0, le=16, description="pixels each frame moves at random in gradient steps (DrQ; 0: no augmentation)"
+    )
+
+
 class Train(BaseModel):
     """Which algorithm, its hyperparameters (one section per algorithm), budget, parallel envs, seed."""
 
@@ -98,6 +108,7 @@ class Train(BaseModel):
     )
     ppo: PPOParams = PPOParams()
     sac: SACParams = SACParams()
+    encoder: Encoder | None = Field(None, description="observation.image's CNN (null: its defaults)")
     normalize: Normalize = Normalize()
     checkpoint_every: int = Field(100_000, ge=1, description="timesteps between checkpoints")
     log_every: int = Field(10_000, ge=1, description="timesteps between training-curve points")
