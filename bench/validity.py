@@ -52,7 +52,7 @@ def cohort(task: str, family: str, root: Path) -> Path:
     return out
 
 
-def measure(task: str, family: str, seed: int, root: Path) -> dict:
+def measure(task: str, family: str, seed: int, root: Path, sets: tuple[str, ...] = ()) -> dict:
     """One protocol run on the family's cohort: tau-b of every score, and its wall time."""
     from rich.console import Console
 
@@ -64,7 +64,7 @@ def measure(task: str, family: str, seed: int, root: Path) -> dict:
         [folder],
         Path(f"specs/{task}.yaml"),
         top=10,
-        overrides=[f"train.seed={seed}"],
+        overrides=[*sets, f"train.seed={seed}"],
         root=root / task / family / "runs",
         console=Console(stderr=True, quiet=True),
         progress=False,
@@ -101,6 +101,7 @@ def main() -> None:
     parser.add_argument("--families", nargs="+", default=[*FAMILIES, "mixed"])
     parser.add_argument("--seeds", nargs="+", type=int, default=[0])
     parser.add_argument("--root", type=Path, default=ROOT)
+    parser.add_argument("--set", dest="sets", action="append", default=[], help="spec change, as fastrl's --set")
     parser.add_argument("--json", type=Path, default=Path("docs/validity.json"))
     parser.add_argument("--from-json", type=Path, help="print the table of an earlier run and stop")
     args = parser.parse_args()
@@ -110,13 +111,13 @@ def main() -> None:
     unknown = [f for f in args.families if f not in FAMILIES and f != "mixed"]
     if unknown:
         parser.error(f"unknown family {unknown[0]}: choose from {', '.join(FAMILIES)}, mixed")
-    started = {"machine": machine_line(), "utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime())}
+    started = {"machine": machine_line(), "utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()), "sets": args.sets}
     print(f"# {started['utc']} UTC, {started['machine']}", flush=True)
     rows = []
     for task in args.tasks:
         for family in args.families:
             for seed in args.seeds:
-                rows.append(measure(task, family, seed, args.root))
+                rows.append(measure(task, family, seed, args.root, tuple(args.sets)))
                 t = rows[-1]["tau_b"]
                 print(
                     f"{task} {family} s{seed}: " + ", ".join(f"{k} {t[k]:.2f}" for k in t if t[k] is not None),

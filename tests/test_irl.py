@@ -295,3 +295,21 @@ def test_a_held_random_action_is_repeated_for_its_steps():
     assert np.allclose(obs, np.array(held), atol=1e-6)
     varied, _ = noisy_expert_rollout(env, ScriptedExpert(env), 1.0, 3, repeat=1)
     assert not np.allclose(varied, obs)
+
+
+def test_degraded_copies_of_recordings_are_ranked_against_each_other_only():
+    spec = load_spec(spec_file("tracelines"), ["episode.time_limit=8"])
+    env = fastrl.make(spec)
+    recordings = expert_trajectories(env, [1, 2])
+    ranked = RankedRollouts(env, [0.0, 0.5, 1.0], 1, snippet=20, recordings=recordings)
+    copies = ranked.source == 1
+    assert copies.sum() == 6 and sorted(ranked.noise[copies]) == [0.0, 0.0, 0.5, 0.5, 1.0, 1.0]
+    clean = np.flatnonzero(copies & (ranked.noise == 0.0))[0]
+    expected = expert_transitions(env, recordings[:1]).obs
+    assert np.allclose(ranked.raw[clean, : len(expected)], expected, atol=1e-5)  # eps 0: the recording as it was
+    worst = np.flatnonzero(copies & (ranked.noise == 1.0))[0]
+    assert not np.allclose(ranked.raw[worst, : len(expected)], expected, atol=1e-3)  # drifted, shaken, slowed
+    better, worse = ranked.pairs(np.random.default_rng(0), 400)
+    assert len(better) > 50 and (ranked.source[better] == ranked.source[worse]).all()  # never across sources
+    assert (ranked.noise[better] < ranked.noise[worse]).all()
+    assert (ranked.source[better] == 1).any() and (ranked.source[better] == 0).any()

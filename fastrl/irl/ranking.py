@@ -15,7 +15,9 @@ import numpy as np
 import torch
 
 from ..agents.expert import ScriptedExpert
-from ..data.replay import rollout_trajectory
+from ..data.overlays import overlaid
+from ..data.replay import replay, rollout_trajectory
+from ..data.trajectory import Trajectory
 from .discriminator import Discriminator, absorbing_states, augment
 
 
@@ -41,8 +43,23 @@ def noisy_expert_rollout(
     return observations.astype(np.float32), traj.meta["subtasks"] >= traj.meta["subtasks_total"]
 
 
+DEGRADE = ("drift", "jitter", "slowed")  # the kinematic overlays a recording's degraded copies carry, each at eps
+
+
+def degraded_recording(env, traj: Trajectory, eps: float, seed: int) -> tuple[np.ndarray, bool]:
+    """Raw observations of a recording whose motion drifts, shakes and slows by `eps` (0: as recorded), replayed;
+    and whether it still completed the task."""
+    u = env.unwrapped
+    hz = u.task_spec.episode.control_hz
+    portal = overlaid(traj.portal, dict.fromkeys(DEGRADE, eps), seed, hz, u.task.ranges)
+    copy = Trajectory(traj.time[0] + np.arange(len(portal)) / hz, portal, traj.meta)
+    obs, infos, _ = replay(env, copy)
+    return obs.astype(np.float32), bool(infos[-1]["success"])
+
+
 class RankedRollouts:
-    """Noisy rollouts of the scripted expert (or `actor`) padded to one length, their noise, r_psi's ranking loss."""
+    """Noisy rollouts of the scripted expert (or `actor`), and with `recordings` degraded copies of them, padded to
+    one length; their noise, and r_psi's ranking loss over pairs of the same source."""
 
     def __init__(
         self,
@@ -54,6 +71,7 @@ class RankedRollouts:
         snippet: int = 50,
         repeat: int = 1,
         actor=None,
+        recordings: list[Trajectory] = (),
     ):
         expert = ScriptedExpert(env) if actor is None else actor  # actor: act(obs) and reset(), e.g. a cloned policy
         runs = [
@@ -62,6 +80,11 @@ class RankedRollouts:
             for k in range(episodes)
         ]
         self.noise = np.repeat(np.asarray(noise, float), episodes)
+        self.source = np.zeros(len(runs), int)
+        copies = [(eps, r) for eps in noise for r in recordings if r.portal is not None and r.instruments is None]
+        runs += [degraded_recording(env, r, eps, seed + k) for k, (eps, r) in enumerate(copies)]
+        self.noise = np.concatenate([self.noise, [eps for eps, _ in copies]])
+        self.source = np.concatenate([self.source, np.ones(len(copies), int)])
         self.snippet = snippet
         horizon = max(len(obs) for obs, _ in runs)
         self.raw = np.stack([np.concatenate([obs, np.repeat(obs[-1:], horizon - len(obs), 0)]) for obs, _ in runs])
@@ -77,17 +100,21 @@ class RankedRollouts:
         s[flag] = absorbing_states(int(flag.sum()), d)
         return s
 
+    def pairs(self, rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """Up to n random (less noisy, noisier) pairs of rollouts of the same source."""
+        i, j = rng.integers(0, len(self.noise), (2, n))
+        keep = (self.noise[i] != self.noise[j]) & (self.source[i] == self.source[j])
+        i, j = i[keep], j[keep]
+        swap = self.noise[i] > self.noise[j]
+        return np.where(swap, j, i), np.where(swap, i, j)
+
     def loss(
         self, disc: Discriminator, states: torch.Tensor, rng: np.random.Generator, pairs: int = 32
     ) -> torch.Tensor:
         """Mean -log P(the less noisy snippet sums higher) over random pairs of rollouts of different noise."""
-        i, j = rng.integers(0, len(self.noise), (2, pairs))
-        keep = self.noise[i] != self.noise[j]
-        i, j = i[keep], j[keep]
-        if not len(i):
+        better, worse = self.pairs(rng, pairs)
+        if not len(better):
             return torch.zeros(())
-        swap = self.noise[i] > self.noise[j]
-        better, worse = np.where(swap, j, i), np.where(swap, i, j)
         steps = states.shape[1]
         start = rng.integers(0, max(steps - self.snippet, 1), len(better))
         t = np.minimum(start[:, None] + np.arange(self.snippet), steps - 1)

@@ -179,7 +179,14 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     ranked = None
     if d.ranking and disc.shaped and not off_policy:
         actor = None if irl.demonstrations.path is None else cloned_actor(spec, demos)  # D-REX: no expert
-        ranked = RankedRollouts(env, d.ranking_noise, d.ranking_episodes, repeat=d.ranking_repeat, actor=actor)
+        ranked = RankedRollouts(
+            env,
+            d.ranking_noise,
+            d.ranking_episodes,
+            repeat=d.ranking_repeat,
+            actor=actor,
+            recordings=demos if d.ranking_degraded else (),
+        )
     elif d.ranking and irl.algorithm == "airl":  # GAIL has no r_psi to rank, so it goes without a word
         console.print(
             "[dim]irl.discriminator.ranking: the ranking prior is for shaped AIRL on PPO; this run goes without it[/]"

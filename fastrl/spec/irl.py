@@ -92,6 +92,11 @@ class DiscriminatorSettings(Strict):
     )
     ranking_episodes: int = Field(4, ge=1, description="ranking rollouts per noise rate")
     ranking_repeat: int = Field(1, ge=1, description="steps each random action of the ranking rollouts is held")
+    ranking_degraded: bool = Field(
+        False,
+        description="also rank copies of the demonstrations degraded at each `ranking_noise` rate (drift, tremor, "
+        "slowed motion: fastrl.data.overlays), pairs of the same source only",
+    )
     average_every: int = Field(
         50000,
         ge=0,
