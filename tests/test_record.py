@@ -178,7 +178,9 @@ def test_keystrokes_to_the_real_window_drive_the_scope_and_the_attempt_replays_t
     _, infos, _ = replay(FastEnv(spec), traj)
     assert len(m["events"]) >= 2 and cue_events(infos) == m["events"]
     fb = m["feedback"]  # scored when it ended; the same in the file, beside it, and in its Rerun recording
-    assert fb["scores"]["time"] == pytest.approx(traj.time[-1]) and fb["worst_moments"]
+    # an attempt that stops before it succeeds is scored as held still to the time limit
+    timed = traj.time[-1] if infos[-1]["success"] else spec.episode.time_limit
+    assert fb["scores"]["time"] == pytest.approx(timed) and fb["worst_moments"]
     saved = next(f for f in tmp_path.glob("*.npz") if ".partial" not in f.name)
     assert saved.with_suffix(".feedback.json").exists() and "/summary" in recorded(saved.with_suffix(".rrd"))[0]
     # and `fastrl replay` plays it back in the viewer and into Rerun
