@@ -100,19 +100,7 @@ def _log_camera(rec, world: str, ep: EpisodeRecord, index: list, fov_deg: float,
     )
     if frames is None:
         return
-    model = {1: "L", 3: "RGB", 4: "RGBA"}[frames.shape[3] if frames.ndim == 4 else 1]
-    fmt = rr.components.ImageFormat(width=w, height=h, color_model=model, channel_datatype="U8")
-    at = np.asarray(keys)
-    img_index = [
-        rr.TimeColumn("step", sequence=at),
-        rr.TimeColumn("sim_time", duration=np.asarray(ep.time)[at]),
-        *_trained_at(timesteps, len(at)),
-    ]
-    rec.send_columns(
-        image,
-        indexes=img_index,
-        columns=rr.Image.columns(buffer=frames.reshape(len(keys), -1), format=[fmt] * len(keys)),
-    )
+    _send_images(rec, image, ep, keys, frames, timesteps)
 
 
 def _log_frames(rec, world: str, ep: EpisodeRecord, timesteps=None) -> None:
@@ -120,9 +108,13 @@ def _log_frames(rec, world: str, ep: EpisodeRecord, timesteps=None) -> None:
     if not ep.frames:
         return
     keys = sorted(ep.frames)
-    frames = np.stack([ep.frames[k] for k in keys])
+    _send_images(rec, f"{world}/policy", ep, keys, np.stack([ep.frames[k] for k in keys]), timesteps)
+
+
+def _send_images(rec, path: str, ep: EpisodeRecord, keys: list, frames: np.ndarray, timesteps) -> None:
+    """uint8 frames (n, h, w[, c]) as images at `path`, on the steps `keys` of the episode's timelines."""
     h, w = frames.shape[1:3]
-    model = "RGB" if frames.ndim == 4 else "L"
+    model = {1: "L", 3: "RGB", 4: "RGBA"}[frames.shape[3] if frames.ndim == 4 else 1]
     fmt = rr.components.ImageFormat(width=w, height=h, color_model=model, channel_datatype="U8")
     at = np.asarray(keys)
     index = [
@@ -131,9 +123,7 @@ def _log_frames(rec, world: str, ep: EpisodeRecord, timesteps=None) -> None:
         *_trained_at(timesteps, len(at)),
     ]
     rec.send_columns(
-        f"{world}/policy",
-        indexes=index,
-        columns=rr.Image.columns(buffer=frames.reshape(len(keys), -1), format=[fmt] * len(keys)),
+        path, indexes=index, columns=rr.Image.columns(buffer=frames.reshape(len(keys), -1), format=[fmt] * len(keys))
     )
 
 
