@@ -15,6 +15,7 @@ from fastrl.irl.discriminator import absorbing_states, augment
 from fastrl.irl.fitting import DiscriminatorFit, input_gradient_norm, make_batch
 from fastrl.irl.ranking import RankedRollouts, noisy_expert_rollout
 from fastrl.spec import load_spec
+from fastrl.spec.columns import discriminator_inputs, reward_inputs
 
 from .conftest import spec_file
 
@@ -205,32 +206,32 @@ def test_airl_reward_inputs_leave_columns_out_of_r_psi_but_not_of_h():
 
 def test_reward_ignore_narrows_the_discriminator_inputs_for_r_psi():
     airl = load_spec(spec_file("tracelines"), ["irl.algorithm=airl", "irl.discriminator.reward_ignore=[elapsed]"])
-    assert airl.discriminator_inputs() is None and airl.reward_inputs() == list(range(38))
+    assert discriminator_inputs(airl) is None and reward_inputs(airl) == list(range(38))
     both = load_spec(
         spec_file("tracelines"),
         ["irl.algorithm=airl", "irl.discriminator.ignore=[contact]", "irl.discriminator.reward_ignore=[elapsed]"],
     )
-    assert both.discriminator_inputs() == [*range(37), 38] and both.reward_inputs() == list(range(37))
+    assert discriminator_inputs(both) == [*range(37), 38] and reward_inputs(both) == list(range(37))
     plain = load_spec(spec_file("tracelines"), ["irl.algorithm=airl", "irl.discriminator.reward_ignore=[]"])
-    assert plain.reward_inputs() is None
+    assert reward_inputs(plain) is None
 
 
 def test_gail_ignores_the_clock_by_default_and_airl_sees_it():
     gail = load_spec(spec_file("imagecentring"), ["irl.algorithm=gail"])
     terms = gail.observation.terms()
-    assert terms[-1] == "elapsed" and gail.discriminator_inputs() == list(range(38))  # 39 columns, the last one
-    assert load_spec(spec_file("imagecentring"), ["irl.algorithm=airl"]).discriminator_inputs() is None
+    assert terms[-1] == "elapsed" and discriminator_inputs(gail) == list(range(38))  # 39 columns, the last one
+    assert discriminator_inputs(load_spec(spec_file("imagecentring"), ["irl.algorithm=airl"])) is None
     assert (
-        load_spec(
-            spec_file("imagecentring"), ["irl.algorithm=gail", "irl.discriminator.ignore=[]"]
-        ).discriminator_inputs()
+        discriminator_inputs(
+            load_spec(spec_file("imagecentring"), ["irl.algorithm=gail", "irl.discriminator.ignore=[]"])
+        )
         is None
     )
     stacked = load_spec(
         spec_file("imagecentring"),
         ["irl.algorithm=airl", "observation.stack=2", "irl.discriminator.ignore=[contact, elapsed]"],
     )
-    assert stacked.discriminator_inputs() == [*range(37), *range(39, 76)]
+    assert discriminator_inputs(stacked) == [*range(37), *range(39, 76)]
 
 
 @pytest.mark.parametrize("kind", ["gail", "airl"])

@@ -2,10 +2,10 @@
 
 import pytest
 import yaml
+from pydantic import ValidationError
 
 from fastrl.runner.rundir import write_spec
-from fastrl.spec import SpecError, TaskSpec, load_spec, spec_hash
-from fastrl.spec.defaults import canonical_dump
+from fastrl.spec import SpecError, TaskSpec, load_spec, spec_hash, task_hash
 
 from .conftest import spec_file
 
@@ -66,23 +66,27 @@ def test_gail_ignores_the_clock_only_where_it_is_observed():
     assert without.irl.discriminator.ignore == [] and with_clock.irl.discriminator.ignore == ["elapsed"]
 
 
-def test_an_old_spec_yaml_with_a_removed_option_at_its_one_value_still_loads(tmp_path):
+def test_a_removed_option_is_an_unknown_field_with_its_file_and_line(tmp_path):
     spec = load_spec(spec_file("imagecentring"), ["irl.algorithm=airl"])
     old = spec.model_dump(mode="json")
-    old["irl"]["discriminator"]["entropy"] = True  # removed: the generator's AIRL reward always keeps -log pi
-    old["irl"]["discriminator"]["batch_size"] = 256  # removed: the discriminator's minibatches are 256 rows
+    old["irl"]["discriminator"]["entropy"] = True  # removed before 0.2: the AIRL reward always keeps -log pi
     (tmp_path / "spec.yaml").write_text(yaml.safe_dump(old))
-    assert load_spec(tmp_path / "spec.yaml") == spec
-    old["irl"]["discriminator"]["entropy"] = False
-    (tmp_path / "spec.yaml").write_text(yaml.safe_dump(old))
-    with pytest.raises(SpecError, match="entropy"):
+    with pytest.raises(SpecError) as err:
         load_spec(tmp_path / "spec.yaml")
+    assert [(e.path, e.line is not None) for e in err.value.errors] == [("irl.discriminator.entropy", True)]
 
 
-def test_generator_options_added_later_keep_the_hash_of_specs_without_them():
-    """Hashed as before the options existed (no key at all) while they hold their off value."""
-    spec = load_spec(spec_file("periscoping"))  # its generator: cloned, not anchored, on time
-    generator = canonical_dump(spec)["irl"]["generator"]
-    assert generator["cloned"] is True and "anchor" not in generator and "late_starts" not in generator
+def test_resolving_the_defaults_leaves_the_spec_it_was_given_alone():
+    spec = load_spec(spec_file("imagecentring"))
+    data = spec.model_dump(mode="json")
+    data["irl"]["algorithm"] = "gail"
+    gail = TaskSpec.model_validate(data)
+    assert gail.irl.discriminator.ignore == ["elapsed"] and spec.irl.discriminator.ignore is None
+    with pytest.raises(ValidationError):
+        gail.irl = spec.irl  # frozen
+
+
+def test_a_generator_option_changes_the_hash():
+    spec = load_spec(spec_file("periscoping"))
     late = load_spec(spec_file("periscoping"), ["irl.generator.late_starts=0.5"])
-    assert canonical_dump(late)["irl"]["generator"]["late_starts"] == 0.5 and spec_hash(late) != spec_hash(spec)
+    assert spec_hash(late) != spec_hash(spec) and task_hash(late) == task_hash(spec)

@@ -10,6 +10,7 @@ import numpy as np
 from ..spec import geometry as geo
 from ..spec.anatomy import landmark_pose
 from ..spec.models import Avatar, Cue, TaskSpec
+from ..spec.reach import cue_for, portal_point
 
 LINE_RGBA = (0.1, 0.25, 0.7, 1.0)
 AVATAR_GROUP = 1
@@ -58,7 +59,7 @@ def resolve_targets(task_spec: TaskSpec) -> Targets:
     avatars, line = task_avatars(task_spec)
     r = task_spec.scene.radius
     poses = [geo.avatar_pose(r, a.surface, a.at, a.heading_deg) for a in avatars]
-    cues: list[Cue] = [task_spec.cue_for(a) for a in avatars]
+    cues: list[Cue] = [cue_for(task_spec, a) for a in avatars]
     pos, fwd, up = (np.array([p[k] for p in poses]) for k in range(3))
     quat = np.array([geo.mat_to_quat(geo.avatar_rotation(f, u)) for f, u in zip(fwd, up)])
     return Targets(
@@ -81,7 +82,7 @@ def resolve_targets(task_spec: TaskSpec) -> Targets:
 def landmark_targets(task_spec: TaskSpec) -> Targets:
     """Targets of a tour: each landmark's organ point facing the portal, fixed (no jitter)."""
     marks = task_spec.task.landmarks
-    portal = task_spec.portal_point()
+    portal = portal_point(task_spec)
     poses = [landmark_pose(task_spec.scene.anatomy[m.organ], portal) for m in marks]
     cues = [m.cue or task_spec.task.cue for m in marks]
     pos, fwd, up = (np.array([p[k] for p in poses]) for k in range(3))

@@ -25,6 +25,7 @@ from ..irl.averaging import RewardAveraging
 from ..irl.demonstrations import expert_transitions
 from ..irl.ranking import RankedRollouts
 from ..model.scope import joint_ranges
+from ..spec.columns import discriminator_inputs, reward_inputs
 from ..spec.models import TaskSpec
 from .cloned import cloned_actor
 from .demos import write_demos
@@ -171,8 +172,8 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
         absorbing=d.absorbing,
         shaped=d.shaped,
         policy_term=d.policy_term,
-        inputs=spec.discriminator_inputs(),
-        reward_inputs=spec.reward_inputs(),
+        inputs=discriminator_inputs(spec),
+        reward_inputs=reward_inputs(spec),
     )
     env = FastEnv(spec)
     transitions = expert_transitions(env, demos)

@@ -35,12 +35,12 @@ def _replace(model, path: tuple[str, ...], value):
     return model.model_copy(update={path[0]: _replace(getattr(model, path[0]), path[1:], value)})
 
 
-def resolve_defaults(spec) -> None:
-    """Replace each null algorithm-dependent field of a TaskSpec by its default (during its validation)."""
+def resolve_defaults(spec):
+    """A copy of a TaskSpec with each null algorithm-dependent field set to its default (the spec itself if none)."""
     for path, value in algorithm_defaults(spec).items():
-        section = getattr(spec, path[0])
-        if _get(section, path[1:]) is None:
-            object.__setattr__(spec, path[0], _replace(section, path[1:], value))  # frozen: set once, here
+        if _get(spec, path) is None:
+            spec = _replace(spec, path, value)
+    return spec
 
 
 def drop_unused_extensions(data: dict) -> dict:
@@ -56,20 +56,8 @@ def drop_unused_extensions(data: dict) -> dict:
 
 def canonical_dump(spec) -> dict:
     """The spec as JSON data with every algorithm-dependent field that holds its default written as null, so a spec
-    hashes the same whether it was resolved or not (old runs and trajectories keep their spec_hash)."""
+    hashes the same whether it was resolved or not."""
     data = drop_unused_extensions(spec.model_dump(mode="json"))
-    for section, key in (("observation", "image"), ("train", "encoder")):  # added later: specs without images
-        if data[section][key] is None:  # keep their hash
-            del data[section][key]
-    if data["train"]["sac"]["periodic_every"] is None:  # added later: specs without it keep their hash
-        del data["train"]["sac"]["periodic_every"]
-    generator = data["irl"]["generator"]
-    if generator is None:  # specs without the generator's own settings keep their former hash
-        del data["irl"]["generator"]
-    else:  # added later: generators that start from scratch, unanchored, on time, keep their hash
-        for key in ("cloned", "anchor", "late_starts"):
-            if not generator[key]:
-                del generator[key]
     for path, value in algorithm_defaults(spec).items():
         node = data
         for name in path[:-1]:

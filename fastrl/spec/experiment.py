@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
+
+from .base import Strict
 
 
-class Experiment(BaseModel):
+class Experiment(Strict):
     """Cohort of graded procedures -> inverse RL on the best by the heuristic -> learned scores vs ground truth."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
     enabled: bool = Field(False, description="`fastrl run` runs this experiment instead of one training")
     levels: int = Field(5, ge=2, le=20, description="skill levels of the synthetic cohort")
     per_level: int = Field(20, ge=1, le=1000, description="procedures per level")

@@ -4,15 +4,10 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field
 
+from .base import Strict
 from .training import PPOParams, Train
-
-
-class Strict(BaseModel):
-    """Frozen, and unknown names are errors."""
-
-    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
 
 class Demonstrations(Strict):
@@ -23,21 +18,8 @@ class Demonstrations(Strict):
     seed: int = Field(0, ge=0, description="seed of the first scripted-expert demonstration")
 
 
-# Options removed because no shipped spec or documented result used them, with the one value they now have: a run's
-# spec.yaml written before holds them, and loads while it holds that value.
-REMOVED = {"entropy": True, "batch_size": 256}
-
-
 class DiscriminatorSettings(Strict):
     """The discriminator network and how it is trained."""
-
-    @model_validator(mode="before")
-    @classmethod
-    def _drop_removed(cls, data):
-        """Drop removed options that hold their one value (any other value stays, an unknown-field error)."""
-        if isinstance(data, dict):
-            data = {k: v for k, v in data.items() if not (k in REMOVED and v == REMOVED[k])}
-        return data
 
     hidden: list[int] = [64, 64]
     learning_rate: float = Field(3e-4, gt=0)

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import math
 from typing import Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from ..terms import OBSERVATION_TERMS
 from . import geometry as geo
 from .anatomy import landmark_pose
 from .base import NonNeg, Pos, Strict, _fail, _raise
@@ -18,6 +16,7 @@ from .instruments import Instrument, instrument_errors
 from .irl import IRL, late_starts, learning_train, starts_cloned
 from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_REPLAY_GB, MAX_SECONDS, MAX_SUBTASKS
 from .loose import Cup, LooseBody, loose_errors
+from .reach import avatar_problem, portal_point, reach_problem
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
 from .shaft import Shaft
 from .state_reward import Observation, Reward
@@ -251,27 +250,27 @@ class TaskSpec(Strict):
                 )
         _raise(errors + instrument_errors(self) + loose_errors(self))
         for i, av in enumerate(self.task.avatars):
-            problem = self.avatar_problem(av)
+            problem = avatar_problem(self, av)
             if problem:
                 errors.append((("task", "avatars", i, "at"), problem, list(av.at)))
         for i, lm in enumerate(self.task.landmarks):
-            pos, _, _ = landmark_pose(anatomy[lm.organ], self.portal_point())
-            problem = self.reach_problem(pos, lm.cue or self.task.cue)
+            pos, _, _ = landmark_pose(anatomy[lm.organ], portal_point(self))
+            problem = reach_problem(self, pos, lm.cue or self.task.cue)
             if problem:
                 errors.append((("task", "landmarks", i, "organ"), problem, lm.organ))
         if self.task.line is not None:
             for i, xy in enumerate(self.task.line.points):
-                problem = self.avatar_problem(Avatar(surface="plate", at=xy))
+                problem = avatar_problem(self, Avatar(surface="plate", at=xy))
                 if problem:
                     errors.append((("task", "line", "points", i), problem, list(xy)))
         _raise(errors)
         return self
 
-    @model_validator(mode="after")
-    def _resolve_defaults(self):
+    @model_validator(mode="wrap")
+    @classmethod
+    def _resolve_defaults(cls, data, handler):
         """Fill the defaults that depend on the algorithms (null in the spec), so a run's spec.yaml records them."""
-        resolve_defaults(self)
-        return self
+        return resolve_defaults(handler(data))
 
     def learning(self) -> Train:
         """The train settings this run learns with (GAIL and AIRL on PPO: irl.generator's envs and PPO)."""
@@ -286,71 +285,3 @@ class TaskSpec(Strict):
     def generator_late_starts(self) -> float:
         """Up to what share of the time limit GAIL/AIRL's PPO generator starts its training episodes late."""
         return late_starts(self.train, self.irl)
-
-    def _discriminator_ignores(self) -> list[str]:
-        """The terms the discriminator leaves out."""
-        return self.irl.discriminator.ignore or []
-
-    def discriminator_inputs(self) -> list[int] | None:
-        """Observation columns the discriminator sees (every frame of a stack); None: all of them."""
-        return self._columns_without(self._discriminator_ignores())
-
-    def reward_inputs(self) -> list[int] | None:
-        """Observation columns shaped AIRL's reward r_psi sees: the discriminator's less `reward_ignore`."""
-        return self._columns_without([*self._discriminator_ignores(), *self.irl.discriminator.reward_ignore])
-
-    def _columns_without(self, terms: list[str]) -> list[int] | None:
-        """Observation columns of every term but these (every frame of a stack); None: all of them."""
-        coords = [i.coordinates for i in self.instruments]
-        column_terms = [n for n in self.observation.terms() for _ in range(OBSERVATION_TERMS[n].width(coords))]
-        keep = [i for i, n in enumerate(column_terms * self.observation.stack) if n not in terms]
-        return None if len(keep) == len(column_terms) * self.observation.stack else keep
-
-    def portal(self) -> Portal:
-        """The portal the scope goes through."""
-        return next(p for p in self.scene.portals if p.name == self.scope.portal)
-
-    def cue_for(self, avatar: Avatar) -> Cue:
-        """The avatar's own cue, else the task's."""
-        return avatar.cue or self.task.cue
-
-    def avatar_problem(self, av: Avatar) -> str | None:
-        """Why an avatar is outside the dome or out of the scope's reach, or None."""
-        r = self.scene.radius
-        if av.surface == "plate" and math.hypot(*av.at) > r - 0.01:
-            return (
-                f"target [{av.at[0]}, {av.at[1]}] is outside the dome: it is {math.hypot(*av.at):.3f} m from "
-                f"the centre, the plate inside the shell ends at {r - 0.01:.3f} m"
-            )
-        if av.surface == "dome" and not 5.0 <= av.at[1] <= 88.0:
-            return f"target elevation {av.at[1]} deg is outside the dome's inner surface (5 to 88 deg)"
-        pos, _, _ = geo.avatar_pose(r, av.surface, av.at, av.heading_deg)
-        return self.reach_problem(pos, self.cue_for(av))
-
-    def portal_point(self) -> np.ndarray:
-        """Where the scope's portal is (m)."""
-        p = self.portal()
-        return geo.portal_frame(self.scene.radius, p.azimuth, p.elevation, p.aim)[0]
-
-    def reach_problem(self, pos: np.ndarray, cue: Cue) -> str | None:
-        """Why the scope cannot view a target at `pos` under `cue`, or None."""
-        p = self.portal()
-        point, rot = geo.portal_frame(self.scene.radius, p.azimuth, p.elevation, p.aim)
-        d = pos - point
-        dist = float(np.linalg.norm(d))
-        off = math.degrees(math.acos(np.clip(d @ rot[:, 2] / dist, -1, 1)))
-        reach = self.scope.pivot_limit_deg + self.scope.optics_deg
-        if off > reach:
-            return (
-                f"portal '{p.name}' cannot reach this target: it lies {off:.0f} deg off the portal axis, "
-                f"the scope reaches {reach:.0f} deg (pivot limit + optics angle)"
-            )
-        far = self.scope.insertion[1] + 0.5 * (cue.distance[0] + cue.distance[1])
-        if dist > far:
-            return (
-                f"portal '{p.name}' cannot reach this target: it is {dist:.3f} m away, the scope holds it "
-                f"at mid viewing distance only up to {far:.3f} m (insertion + viewing distance)"
-            )
-        if dist < cue.distance[0]:
-            return f"target is {dist:.3f} m from portal '{p.name}', closer than the cue's minimum distance"
-        return None

@@ -4,15 +4,14 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
+from .base import Strict
 from .learners import LEARNERS, LearnerKind
 
 
-class Params(BaseModel):
+class Params(Strict):
     """Base for hyperparameter sets: unknown names are errors."""
-
-    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
 
 class PPOParams(Params):
@@ -68,10 +67,9 @@ class SACParams(Params):
     )
 
 
-class Normalize(BaseModel):
+class Normalize(Strict):
     """Running normalisation of observations and rewards (VecNormalize)."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
     obs: bool = True
     reward: bool | None = Field(
         None,
@@ -81,20 +79,18 @@ class Normalize(BaseModel):
     )
 
 
-class Encoder(BaseModel):
+class Encoder(Strict):
     """The CNN that reads observation.image: its output width and DrQ's random shift while training."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
     features: int = Field(64, ge=8, le=1024, description="width of the CNN's output (the state is appended to it)")
     shift: int = Field(
         4, ge=0, le=16, description="pixels each frame moves at random in gradient steps (DrQ; 0: no augmentation)"
     )
 
 
-class Train(BaseModel):
+class Train(Strict):
     """Which algorithm, its hyperparameters (one section per algorithm), budget, parallel envs, seed."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
     algo: Literal["PPO", "SAC"] = "PPO"
     timesteps: int = Field(500_000, ge=1)
     n_envs: int = Field(8, ge=1, le=256)
@@ -128,10 +124,9 @@ class Train(BaseModel):
         return self.params().model_dump(exclude={"periodic_every"})
 
 
-class Evaluate(BaseModel):
+class Evaluate(Strict):
     """Deterministic evaluation episodes after training, and what of them goes into the recording."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
     episodes: int = Field(20, ge=1)
     seed: int = Field(10_000, ge=0)
     image_every: int = Field(4, ge=0, description="log the endoscope image every k steps (0: never)")

@@ -1,0 +1,24 @@
+"""Which observation columns each learned network sees: the column layout a spec's observation terms make."""
+
+from __future__ import annotations
+
+from ..terms import OBSERVATION_TERMS
+
+
+def columns_without(spec, terms: list[str]) -> list[int] | None:
+    """Observation columns of every term but these (every frame of a stack); None: all of them."""
+    coords = [i.coordinates for i in spec.instruments]
+    column_terms = [n for n in spec.observation.terms() for _ in range(OBSERVATION_TERMS[n].width(coords))]
+    keep = [i for i, n in enumerate(column_terms * spec.observation.stack) if n not in terms]
+    return None if len(keep) == len(column_terms) * spec.observation.stack else keep
+
+
+def discriminator_inputs(spec) -> list[int] | None:
+    """Observation columns the discriminator sees (every frame of a stack); None: all of them."""
+    return columns_without(spec, spec.irl.discriminator.ignore or [])
+
+
+def reward_inputs(spec) -> list[int] | None:
+    """Observation columns shaped AIRL's reward r_psi sees: the discriminator's less `reward_ignore`."""
+    d = spec.irl.discriminator
+    return columns_without(spec, [*(d.ignore or []), *d.reward_ignore])
