@@ -27,12 +27,19 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
 import json
-import platform
-import time
 from pathlib import Path
 
 import numpy as np
-from irl_tasks import curve, finished_runs, plot_mean_range, save_figure
+from common import (
+    eval_curve,
+    figure_path,
+    finished_runs,
+    label_curve_axes,
+    machine_line,
+    plot_mean_range,
+    save_figure,
+    sweep,
+)
 
 VARIANTS = {
     "full": ["irl.discriminator.spectral_norm=true", "irl.discriminator.current_rollout=true"],
@@ -81,9 +88,6 @@ def run(args) -> None:
     """One sweep: the variants asked for x the seeds, each trial an ordinary run."""
     from datetime import UTC, datetime
 
-    from fastrl.runner.sweep import create_sweep, run_sweep
-    from fastrl.runner.sweep_table import write_results
-
     base = [
         *COMMON,
         *SCHEDULES[args.schedule],
@@ -95,13 +99,10 @@ def run(args) -> None:
     ]
     settings = [dict(kv.split("=", 1) for kv in VARIANTS[v]) for v in args.variants]
     folder = Path(args.root) / f"{datetime.now(UTC).strftime('%Y%m%dT%H%M%SZ')}-sweep"
-    t0 = time.perf_counter()
-    create_sweep(Path("specs/tracelines.yaml"), base, {}, args.seeds, args.cpus_per_trial, folder, settings)
-    failed = run_sweep(folder, args.address)
-    write_results(folder, failed)
-    print(f"{folder} in {time.perf_counter() - t0:.0f} s, {len(failed)} failed", flush=True)
-    for f in failed:
-        print(f"  {f['trial']} failed twice: {f['error']}", flush=True)
+    spec = Path("specs/tracelines.yaml")
+    sweep(
+        spec, base, seeds=args.seeds, cpus=args.cpus_per_trial, folder=folder, settings=settings, address=args.address
+    )
 
 
 def variant_of(run_dir: Path) -> str | None:
@@ -120,7 +121,7 @@ def report(args) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; root {args.root}")
+    print(f"# machine: {machine_line()}; root {args.root}")
     print("| variant | seeds | final subtasks, mean ± sd | final success | steps to 90% (per seed) | train steps/s |")
     print("|---|---|---|---|---|---|")
     fig, ax = plt.subplots(figsize=(7, 4.2))
@@ -134,7 +135,7 @@ def report(args) -> None:
         for run_dir in runs:
             ev = json.loads((run_dir / "eval.json").read_text())
             meta = json.loads((run_dir / "meta.json").read_text())
-            steps, subs, _ = curve(run_dir)
+            steps, subs, _ = eval_curve(run_dir)
             finals.append(ev["agent"]["subtasks_completed"])
             success.append(ev["agent"]["success_rate"])
             hit = next((s for s, v in zip(steps, subs) if v >= 0.9 * ev["expert"]["subtasks_completed"]), None)
@@ -159,12 +160,7 @@ def report(args) -> None:
             f"{hits} | {np.mean(fps):.0f} |"
         )
     ax.axhline(0.9, color="grey", ls=":", lw=1)
-    ax.set(
-        title="Off-policy AIRL (SAC) on TraceLines: mean and range over seeds",
-        xlabel="environment steps",
-        ylabel="subtasks completed (10 eval seeds)",
-        ylim=(-0.02, 1.02),
-    )
+    label_curve_axes(ax, "Off-policy AIRL (SAC) on TraceLines: mean and range over seeds")
     ax.legend()
     fig.tight_layout()
     save_figure(fig, args.figure, rows)
@@ -196,8 +192,7 @@ def main() -> None:
     ap.add_argument("--cpus-per-trial", type=int, default=1, help="CPUs and torch threads of each run")
     args = ap.parse_args()
     if args.figure is None:
-        default_root = Path(args.root) == Path(ap.get_default("root"))
-        args.figure = "docs/irl_fig5.png" if default_root else str(Path(args.root) / "fig5.png")
+        args.figure = figure_path(args.root, ap.get_default("root"), "docs/irl_fig5.png", "fig5.png")
     run(args) if args.command == "run" else report(args)
 
 

@@ -21,9 +21,9 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
 import json
-import platform
-import time
 from pathlib import Path
+
+from common import eval_curve, figure_path, finished_runs, first_at, label_curve_axes, machine_line, save_figure, sweep
 
 TASKS = ["imagecentring", "periscoping", "tracelines"]
 ALGOS = ["ppo", "gail", "airl", "bc"]
@@ -50,53 +50,21 @@ def run(args) -> None:
     """A sweep per task: the algorithms asked for x the seeds, each trial an ordinary run."""
     from datetime import UTC, datetime
 
-    from fastrl.runner.sweep import create_sweep, run_sweep
-    from fastrl.runner.sweep_table import write_results
-
     stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
     settings = [{"irl.algorithm": IRL_ALGORITHM[a]} for a in args.algos]
     for task in args.tasks:
-        t0 = time.perf_counter()
         folder = Path(args.root) / task / f"{stamp}-sweep"
         spec = Path("specs") / f"{task}.yaml"
-        create_sweep(spec, overrides(args.cap) + args.set, {}, args.seeds, args.cpus_per_trial, folder, settings)
-        failed = run_sweep(folder, args.address)
-        write_results(folder, failed)
-        print(f"{task}: {folder} in {time.perf_counter() - t0:.0f} s, {len(failed)} failed", flush=True)
-        for f in failed:
-            print(f"  {f['trial']} failed twice: {f['error']}", flush=True)
-
-
-def curve(run_dir: Path) -> tuple[list[int], list[float], list[float]]:
-    """(timesteps, evaluation subtasks, wall seconds) of a run's periodic evaluations."""
-    steps, subtasks, fps_time = [], [], []
-    for line in (run_dir / "metrics.jsonl").read_text().splitlines():
-        row = json.loads(line)
-        if "eval/subtasks" in row:
-            steps.append(row["timesteps"])
-            subtasks.append(row["eval/subtasks"])
-            fps_time.append(row["timesteps"] / max(row["fps"], 1e-9))
-    return steps, subtasks, fps_time
-
-
-def plot_mean_range(ax, curves: list[tuple[list[int], list[float]]], label: str, alpha: float = 0.15) -> None:
-    """Mean and min-max band of evaluation curves over seeds (cut to the shortest), starting at (0, 0)."""
-    import numpy as np
-
-    n = min(len(c[0]) for c in curves)
-    steps = [0, *curves[0][0][:n]]
-    subs = np.array([[0, *c[1][:n]] for c in curves])
-    (line,) = ax.plot(steps, subs.mean(0), label=label)
-    ax.fill_between(steps, subs.min(0), subs.max(0), color=line.get_color(), alpha=alpha)
-
-
-def save_figure(fig, path: str, rows) -> None:
-    """The figure as PNG and its data as JSON beside it."""
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    out.with_suffix(".json").write_text(json.dumps(rows, indent=2))
-    print(f"figure: {out}")
+        sweep(
+            spec,
+            overrides(args.cap) + args.set,
+            seeds=args.seeds,
+            cpus=args.cpus_per_trial,
+            folder=folder,
+            settings=settings,
+            address=args.address,
+            prefix=f"{task}: ",
+        )
 
 
 def algo_of(run_dir: Path) -> str:
@@ -105,11 +73,6 @@ def algo_of(run_dir: Path) -> str:
 
     irl = yaml.safe_load((run_dir / "spec.yaml").read_text())["irl"]["algorithm"]
     return "ppo" if irl == "none" else irl
-
-
-def finished_runs(folder: Path) -> list[Path]:
-    """Every finished run directory under a folder: a sweep's trials and older runs made one by one."""
-    return sorted(f.parent for f in Path(folder).rglob("eval.json") if (f.parent / "meta.json").exists())
 
 
 def report(args) -> None:
@@ -123,10 +86,7 @@ def report(args) -> None:
     if not present:
         raise SystemExit(f"no finished runs under {args.root}")
     rows, fig = [], plt.figure(figsize=(4.4 * len(present), 3.8))
-    print(
-        f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-        f"{platform.python_version()}; root {args.root}"
-    )
+    print(f"# machine: {machine_line()}; root {args.root}")
     print(
         "| task | algorithm | steps to 90% of expert | wall time to 90% | steps trained | train time | "
         "final success | final subtasks (expert) |"
@@ -141,9 +101,9 @@ def report(args) -> None:
             algo = algo_of(run_dir)
             meta = json.loads((run_dir / "meta.json").read_text())
             ev = json.loads((run_dir / "eval.json").read_text())
-            steps, subs, secs = curve(run_dir) if algo != "bc" else ([], [], [])  # BC trains offline: no curve
+            steps, subs, secs = eval_curve(run_dir) if algo != "bc" else ([], [], [])  # BC trains offline: no curve
             expert = ev["expert"]["subtasks_completed"]
-            hit = next((i for i, s in enumerate(subs) if s >= 0.9 * expert), None)
+            hit = first_at(subs, 0.9 * expert)
             row = {
                 "task": task,
                 "algo": algo,
@@ -179,15 +139,11 @@ def report(args) -> None:
                     color=f"C{ALGOS.index(algo)}",
                 )
         ax.axhline(0.9, color="grey", ls=":", lw=1)
-        ax.set(title=task, xlabel="environment steps", ylabel="subtasks completed (10 eval seeds)", ylim=(-0.02, 1.02))
+        label_curve_axes(ax, task)
         ax.xaxis.set_major_formatter(lambda x, _: f"{x / 1e6:g}M" if x >= 1e6 else f"{x / 1e3:g}k" if x else "0")
         ax.legend()
     fig.tight_layout()
-    out = Path(args.figure)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    (out.with_suffix(".json")).write_text(json.dumps(rows, indent=2))
-    print(f"figure: {out}")
+    save_figure(fig, args.figure, rows)
 
 
 def main() -> None:
@@ -216,8 +172,7 @@ def main() -> None:
     )
     args = ap.parse_args()
     if args.figure is None:
-        default_root = Path(args.root) == Path(ap.get_default("root"))
-        args.figure = "docs/irl_fig4.png" if default_root else str(Path(args.root) / "fig4.png")
+        args.figure = figure_path(args.root, ap.get_default("root"), "docs/irl_fig4.png", "fig4.png")
     run(args) if args.mode == "run" else report(args)
 
 

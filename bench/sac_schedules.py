@@ -20,12 +20,11 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
 import json
-import platform
 import time
 from pathlib import Path
 
 import numpy as np
-from irl_tasks import curve, plot_mean_range, save_figure
+from common import eval_curve, label_curve_axes, machine_line, plot_mean_range, save_figure
 
 SCHEDULES = {
     # name: (what differs from the reference, spec overrides)
@@ -91,7 +90,7 @@ def summarise(run_dir: Path) -> dict:
     """Final evaluation, speed and learning curve of one run."""
     ev = json.loads((run_dir / "eval.json").read_text())
     meta = json.loads((run_dir / "meta.json").read_text())
-    steps, subs, _ = curve(run_dir)
+    steps, subs, _ = eval_curve(run_dir)
     return {
         "run": str(run_dir),
         "final_subtasks": ev["agent"]["subtasks_completed"],
@@ -110,7 +109,7 @@ def report(args) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; root {args.root}")
+    print(f"# machine: {machine_line()}; root {args.root}")
     print(
         "| schedule | what | seeds | final subtasks | final success | train steps/s | train wall time | speed vs sb3 |"
     )
@@ -137,12 +136,7 @@ def report(args) -> None:
             f"{name} (n={len(runs)}, {fps:.0f} steps/s)",
             alpha=0.12,
         )
-    ax.set(
-        title="SAC on TraceLines (rates): update schedules, mean and range over seeds",
-        xlabel="environment steps",
-        ylabel="subtasks completed (10 eval seeds)",
-        ylim=(-0.02, 1.02),
-    )
+    label_curve_axes(ax, "SAC on TraceLines (rates): update schedules, mean and range over seeds")
     ax.legend(fontsize=8)
     fig.tight_layout()
     save_figure(fig, args.figure, rows)

@@ -16,9 +16,10 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
 import json
-import platform
 import time
 from pathlib import Path
+
+from common import eval_curve, first_at, load_after, machine_line
 
 
 def main() -> None:
@@ -32,7 +33,7 @@ def main() -> None:
     args = p.parse_args()
     from fastrl.runner import start_run
 
-    print(f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; load {os.getloadavg()}")
+    print(f"# machine: {machine_line()}")
     changes = [
         f"train.timesteps={args.cap}",
         f"train.seed={args.seed}",
@@ -46,16 +47,13 @@ def main() -> None:
     t0 = time.perf_counter()
     run = start_run(Path(args.spec), changes, args.root, progress=False)
     wall = time.perf_counter() - t0
-    hit = None
+    steps, subtasks, seconds = eval_curve(run)
     print("| timesteps | eval subtasks | train seconds |")
     print("|---|---|---|")
-    for line in (run / "metrics.jsonl").read_text().splitlines():
-        row = json.loads(line)
-        if "eval/subtasks" in row:
-            secs = row["timesteps"] / max(row["fps"], 1e-9)
-            print(f"| {row['timesteps']:,} | {row['eval/subtasks']:.1%} | {secs:.0f} |")
-            if hit is None and row["eval/subtasks"] >= 0.9:
-                hit = (row["timesteps"], secs)
+    for step, share, secs in zip(steps, subtasks, seconds):
+        print(f"| {step:,} | {share:.1%} | {secs:.0f} |")
+    i = first_at(subtasks, 0.9)
+    hit = None if i is None else (steps[i], seconds[i])
     meta = json.loads((run / "meta.json").read_text())
     ev = json.loads((run / "eval.json").read_text())
     print(f"run: {run} (wall {wall:.0f} s incl. evaluation and recording)")
@@ -68,7 +66,7 @@ def main() -> None:
         f"final ({agent.get('episodes', '?')} episodes): agent {agent['subtasks_completed']:.1%} subtasks, "
         f"success {agent['success_rate']:.0%}; scripted expert {expert['subtasks_completed']:.1%}"
     )
-    print(f"load after: {os.getloadavg()}")
+    print(load_after())
 
 
 if __name__ == "__main__":
