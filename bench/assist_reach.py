@@ -19,6 +19,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+from common import machine_line
 
 from fastrl.agents.expert import ScriptedExpert
 from fastrl.assist import Suggester
@@ -67,6 +68,7 @@ def main() -> None:
         "epsilon": args.epsilon,
     }
     result["load_average_before"] = os.getloadavg()[0]
+    print(machine_line())
     for name, eps in [("expert", 0.0)] + [(f"degraded eps={e:g}", e) for e in args.epsilon]:
         rows = [
             r for s in range(30000, 30000 + args.episodes) for r in sample(env, suggester, expert, eps, s, args.every)

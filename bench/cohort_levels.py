@@ -16,10 +16,10 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # before anything imports mujoco
 
 import argparse
 import json
-import platform
 import time
 from pathlib import Path
 
+from common import machine_line
 from scipy.stats import kendalltau
 
 from fastrl.data.cohort import level_table, make_cohort, replayed_figures
@@ -63,7 +63,7 @@ def main() -> None:
     ap.add_argument("--tasks", default="imagecentring,periscoping,tracelines")
     ap.add_argument("--json", type=Path)
     a = ap.parse_args()
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, python {platform.python_version()}")
+    print(f"# {machine_line()}")
     results = []
     for task in a.tasks.split(","):
         r = measure(task, a.levels, a.per_level, a.seed)

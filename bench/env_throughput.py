@@ -21,12 +21,10 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # before anything imports mujoco
 
 import argparse
 import cProfile
-import datetime as dt
 import json
 import platform
 import pstats
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -34,6 +32,7 @@ from pathlib import Path
 import gymnasium
 import mujoco
 import numpy as np
+from common import cpu_model, cpuinfo, git_commit, load_figures, utc_stamp
 
 import fastrl  # (registers the fastrl/<Id>-v0 ids)
 
@@ -51,49 +50,21 @@ N_RESETS, N_RENDERS = 30, 30
 # ---- machine -------------------------------------------------------------------------------
 def machine_info() -> dict:
     """CPU, cores, load, library versions, git commit and UTC date."""
-    cpu, mhz = None, None
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            key, _, value = line.partition(":")
-            if key.strip() == "model name" and cpu is None:
-                cpu = value.strip()
-            elif key.strip() == "cpu MHz" and mhz is None:
-                mhz = float(value)
-    except (OSError, ValueError):
-        pass
-    cpu = cpu or platform.processor() or "?"
-    try:
-        load = Path("/proc/loadavg").read_text().split()[:3]
-    except OSError:
-        load = []
-    try:
-        commit = (
-            subprocess.run(
-                ["git", "rev-parse", "--short", "HEAD"],
-                check=False,
-                cwd=ROOT,
-                text=True,
-                capture_output=True,
-                timeout=5,
-            ).stdout.strip()
-            or None
-        )
-    except (OSError, subprocess.SubprocessError):
-        commit = None
+    mhz = cpuinfo("cpu MHz")
     return {
-        "date_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
-        "cpu": cpu,
-        "cpu_mhz": mhz,
+        "date_utc": utc_stamp(),
+        "cpu": cpu_model(),
+        "cpu_mhz": float(mhz) if mhz else None,
         "cores": os.cpu_count(),
         "cores_usable": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
-        "loadavg": load,
+        "loadavg": load_figures(),
         "platform": platform.platform(),
         "python": platform.python_version(),
         "numpy": np.__version__,
         "mujoco": mujoco.__version__,
         "gymnasium": gymnasium.__version__,
         "fastrl": fastrl.__version__,
-        "git_commit": commit,
+        "git_commit": git_commit(),
         "mujoco_gl": os.environ.get("MUJOCO_GL"),
     }
 
@@ -451,7 +422,7 @@ def main(argv: list[str] | None = None) -> int:
     for name in tasks:
         results[name] = bench_task(name, args.seconds, args.rounds, args.seed, console.print)
     elapsed = time.perf_counter() - t0
-    info["loadavg_end"] = machine_info()["loadavg"]
+    info["loadavg_end"] = load_figures()
     print_report(console, info, results, elapsed)
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)

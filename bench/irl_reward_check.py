@@ -34,12 +34,12 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
 import json
-import platform
 import re
 import warnings
 from pathlib import Path
 
 import numpy as np
+from common import machine_line
 from scipy.stats import spearmanr
 
 READINGS = {  # rho's name: (heuristic, learned) fields of a row
@@ -529,10 +529,7 @@ def main() -> None:
     args = ap.parse_args()
     if not args.runs and not args.from_json:
         ap.error("give run directories, or --from-json with earlier results")
-    print(
-        f"# machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-        f"load {os.getloadavg()[0]:.1f}"
-    )
+    print(f"# machine: {machine_line()}")
     results = [r for f in args.from_json for r in json.loads(f.read_text())]
     if args.pool is not None:
         results += check_pool(args.runs, args.pool or args.runs, args.episodes, not args.final)

@@ -29,6 +29,8 @@ import platform
 import time
 from pathlib import Path
 
+from common import machine_line
+
 TASKS = ("imagecentring", "periscoping", "tracelines")
 ROOT = Path("runs/bench-people")  # --root changes it
 
@@ -216,6 +218,7 @@ def main() -> None:
         return
     results = json.loads(args.out.read_text()) if args.out.exists() else {"tasks": {}}
     results["machine"] = {"platform": platform.platform(), "cpus": os.cpu_count(), "load": os.getloadavg()}
+    print(machine_line())
     for task in args.tasks:
         full, bare = cohort(task, 5, 10)
         by = results["tasks"].setdefault(task, {})

@@ -18,11 +18,11 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
 import json
-import platform
 import time
 from pathlib import Path
 
 import numpy as np
+from common import machine_line
 
 SPEC = Path("specs/liver_tour.yaml")
 CELLS = ("reward-economy", "reward-safety", "value-economy", "value-safety")
@@ -71,7 +71,7 @@ def main() -> None:
         results.append(r)
         seconds.append(t)
     table = summary(results)
-    machine = f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, {platform.python_version()}"
+    machine = machine_line()
     print(f"\nTable 3 over {len(results)} seeds ({machine}); Spearman's rho mean ± sd (largest p)")
     print("| model | " + " | ".join(CELLS) + " |\n|---|" + "---|" * len(CELLS))
     for algo in ("gail", "airl"):

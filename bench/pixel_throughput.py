@@ -28,12 +28,12 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # before anything imports mujoco
 import argparse
 import json
 import multiprocessing as mp
-import platform
 import time
 from pathlib import Path
 
 import mujoco
 import numpy as np
+from common import cpu_model, load_average, load_figures, utc_stamp
 
 ROOT = Path(__file__).resolve().parent.parent
 SPEC = ROOT / "specs" / "tracelines.yaml"
@@ -42,22 +42,14 @@ N_STATES = 300
 
 def machine() -> dict:
     """CPU model, cores, load average, versions, UTC date."""
-    cpu = next(
-        (
-            line.split(":", 1)[1].strip()
-            for line in Path("/proc/cpuinfo").read_text().splitlines()
-            if "model name" in line
-        ),
-        platform.processor(),
-    )
     import stable_baselines3
     import torch
 
     return {
-        "date_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "cpu": cpu,
+        "date_utc": utc_stamp(),
+        "cpu": cpu_model(),
         "cores": os.cpu_count(),
-        "load": Path("/proc/loadavg").read_text().split()[:3],
+        "load": load_figures(),
         "mujoco": mujoco.__version__,
         "torch": torch.__version__,
         "sb3": stable_baselines3.__version__,
@@ -307,8 +299,8 @@ def main() -> None:
     out["encoder"] = encoder_cost(sizes)
     for row in out["encoder"]:
         print("encoder", row)
-    out["load_after"] = Path("/proc/loadavg").read_text().split()[:3]
-    print("load before", " ".join(out["machine"]["load"]), "after", " ".join(out["load_after"]))
+    out["load_after"] = load_figures()
+    print("load before", " ".join(out["machine"]["load"]), "after", load_average())
     if args.json:
         args.json.write_text(json.dumps(out, indent=1))
 

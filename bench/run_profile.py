@@ -21,11 +21,12 @@ os.environ.setdefault("CI", "1")
 import argparse
 import functools
 import json
-import platform
 import tempfile
 import time
 from collections import defaultdict
 from pathlib import Path
+
+from common import machine_line
 
 from fastrl.agents.workers import FreshInfoVecEnv, SplitVecEnv
 from fastrl.env.fast_env import FastEnv
@@ -125,14 +126,10 @@ def main() -> None:
         - TIMERS["logging: log_training_columns"]
         - TIMERS["checkpointing: periodic (in training)"]
     )
-    print(
-        f"fastrl run profile  {platform.processor() or platform.machine()}  {os.cpu_count()} cpus  "
-        f"python {platform.python_version()}"
-    )
+    print(f"fastrl run profile  {machine_line()}")
     print(
         f"spec {args.spec} {' '.join(args.set)}  timesteps {meta['trained_timesteps']}  eval episodes {args.episodes}"
     )
-    print(f"load {' '.join(Path('/proc/loadavg').read_text().split()[:3])}")
     print(f"wall {wall:.1f} s  (training {train:.1f} s, {meta['trained_timesteps'] / train:.0f} steps/s)\n")
     print(f"{'part':52s} {'seconds':>9s} {'share':>7s} {'calls':>8s}")
     for name, sec in sorted(rows.items(), key=lambda kv: -kv[1]):

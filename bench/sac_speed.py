@@ -18,10 +18,10 @@ import os
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
-import platform
 import time
 
 import torch
+from common import machine_line
 
 SCHEDULES = {
     # name: (n_envs, train_freq per env, gradient_steps, batch, net, lean update, AIRL discriminator in the loop)
@@ -86,10 +86,7 @@ def main() -> None:
             cache["t"] = expert_transitions(FastEnv(spec), expert_trajectories(FastEnv(spec), range(20)))
         return cache["t"]
 
-    print(
-        f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}, "
-        f"torch {torch.__version__} (models on 1 thread)"
-    )
+    print(f"# {machine_line()}, torch {torch.__version__} (models on 1 thread)")
     print("| schedule | envs | steps/update | batch | net | lean | steps/s | ms per update | vs plain SB3 SAC |")
     print("|---|---|---|---|---|---|---|---|---|")
     ref = None

@@ -26,7 +26,8 @@ import time
 from pathlib import Path
 
 import psutil
-from score_speed import fastrl, machine, make_cohort, make_run
+from common import load_after, load_average, machine_line
+from score_speed import fastrl, make_cohort, make_run
 
 ROOT = Path("runs/bench-scale")
 
@@ -116,7 +117,7 @@ def main() -> None:
     run = args.run or make_run(args.root)
     cohort = args.cohort or make_cohort(args.root)
     counts = [int(c) for c in args.counts.split(",")]
-    print(f"machine: {machine()}")
+    print(f"machine: {machine_line()}")
     print(f"run: {run}\ncohort copied from: {cohort} ({len(list(cohort.glob('*.npz')))} files)")
     print(fastrl("--version").stdout.strip())
     results = {}
@@ -133,7 +134,7 @@ def main() -> None:
         print(
             f"{n} files: {r['wall']:.1f} s wall (scoring {seconds['scoring']:.1f} s, pictures "
             f"{seconds.get('pictures', 0):.1f} s); peak RSS main {mb(r['main_peak'])}{helper}, "
-            f"both at once {mb(r['sum_peak'])}; load now {', '.join(f'{x:.2f}' for x in os.getloadavg())}"
+            f"both at once {mb(r['sum_peak'])}; load now {load_average()}"
         )
     if len(results) > 1:
         lo, hi = results[counts[0]], results[counts[-1]]
@@ -160,7 +161,7 @@ def main() -> None:
         f"rerun: {second['wall']:.1f} s wall, exit {second['code']}, peak RSS main {mb(second['main_peak'])}; "
         f"{said[-1] if said else second['stderr'][-500:]}; rows equal to the uninterrupted run's: {same}"
     )
-    print(f"load average after: {', '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    print(load_after())
 
 
 if __name__ == "__main__":

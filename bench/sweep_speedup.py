@@ -26,10 +26,10 @@ import platform
 import shutil
 import tempfile
 import time
-from datetime import UTC, datetime
 from pathlib import Path
 
 import torch
+from common import cpu_model, load_average, load_figures, machine_line, utc_stamp
 from rich.console import Console
 
 from fastrl.runner import start_run
@@ -42,10 +42,10 @@ SPEC = Path(__file__).resolve().parent.parent / "specs" / "tracelines.yaml"
 def machine() -> dict:
     """CPU, cores and load average now."""
     return {
-        "cpu": platform.processor() or platform.machine(),
+        "cpu": cpu_model(),
         "cores": os.cpu_count(),
-        "load_avg": [round(x, 2) for x in os.getloadavg()],
-        "utc": datetime.now(UTC).isoformat(timespec="seconds"),
+        "load_avg": [float(x) for x in load_figures()],
+        "utc": utc_stamp(),
     }
 
 
@@ -96,7 +96,7 @@ def main() -> None:
     root = Path(tempfile.mkdtemp(prefix="sweep_speedup-"))
     try:
         before = machine()
-        print(f"machine: {before['cpu']}, {before['cores']} cores, load average {before['load_avg']}", flush=True)
+        print(f"machine: {machine_line()}", flush=True)
         halves = {}
         for name, one_cpu in (("serial", False), ("serial_one_cpu", True)):
             folder = create_sweep(SPEC, base, grid, seeds, 1, root / name)
@@ -115,7 +115,7 @@ def main() -> None:
         done = sum(r["seeds"] for r in summarize(swept)["rows"])
         t_serial, t_one = halves["serial"]["s"], halves["serial_one_cpu"]["s"]
         print(f"fastrl sweep (Ray Tune, 1 CPU per trial): {t_sweep:.1f} s, cores busy {sweep_busy} ({done}/{n} trials)")
-        print(f"speed-up: {t_serial / t_sweep:.2f}x over runs as fastrl run does (load after: {after['load_avg']})")
+        print(f"speed-up: {t_serial / t_sweep:.2f}x over runs as fastrl run does (load after: {load_average()})")
         print(f"          {t_one / t_sweep:.2f}x over the same runs kept to one CPU each")
         busy = halves["serial"]["cores_busy"]
         ceiling = (os.cpu_count() or 1) / busy if busy else None

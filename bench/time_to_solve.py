@@ -31,13 +31,14 @@ os.environ.setdefault("CI", "1")
 
 import argparse
 import json
-import platform
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from common import load_average, machine_line
 
 ROOT = Path(__file__).resolve().parent.parent
 TASKS = ("imagecentring", "periscoping", "tracelines")
@@ -133,15 +134,6 @@ def first_at_mark(events: list, start: float = 0.0):
     return None
 
 
-def machine() -> str:
-    """CPU model, cores and load average."""
-    cpu = next(
-        (ln.split(":", 1)[1].strip() for ln in Path("/proc/cpuinfo").read_text().splitlines() if "model name" in ln),
-        platform.processor(),
-    )
-    return f"{cpu}, {os.cpu_count()} cores, load {' '.join(Path('/proc/loadavg').read_text().split()[:3])}"
-
-
 def main() -> None:
     """Both sides per task, then the table."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -164,11 +156,11 @@ def main() -> None:
         return sb3_side(args.task, args.seed, args.out, args.sb3_cap, args.eval_every, args.algo)
     print(
         f"{args.algo}: time to {MARK:.0%} of subtasks  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  "
-        f"{machine()}"
+        f"{machine_line()}"
     )
     if args.set:
         print(f"fastrl overrides: {' '.join(args.set)}")
-    report = {"algo": args.algo, "machine": machine(), "tasks": {}}
+    report = {"algo": args.algo, "machine": machine_line(), "tasks": {}}
     for task in args.tasks:
         rows = {"fastrl": [], "sb3": []}
         for seed in args.seeds:
@@ -227,7 +219,7 @@ def main() -> None:
             f"{task:14s} {fastrl} | SB3 defaults "
             + (f"{statistics.median(sb3):.1f} s" if len(sb3) == len(rows["sb3"]) and sb3 else "not reached")
             + f", {statistics.median(r['steps_per_s'] for r in rows['sb3']) if rows['sb3'] else 0:.0f} steps/s"
-            f"  (load now {' '.join(Path('/proc/loadavg').read_text().split()[:3])})",
+            f"  (load now {load_average()})",
             flush=True,
         )
         report["tasks"][task] = rows
