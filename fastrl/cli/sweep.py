@@ -67,7 +67,8 @@ def sweep(
     runs: Annotated[Path, typer.Option("--runs", help="root folder of run directories")] = Path("runs"),
 ) -> None:
     """Run a grid of spec settings x seeds on Ray Tune; print and write the results table, best and figure."""
-    from ..runner.sweep import SweepError, create_sweep, parse_grid, parse_seeds, read_manifest, run_sweep
+    from ..runner.sweep import SweepError, create_sweep, parse_grid, parse_seeds, read_manifest
+    from ..runner.sweep_ray import run_sweep
     from ..runner.sweep_table import write_results
 
     if (spec is None) == (resume is None):

@@ -1,23 +1,16 @@
-"""A grid sweep on Ray Tune: every trial an ordinary run in its own directory under the sweep folder."""
+"""A sweep's plan and folder: configurations x seeds, each trial an ordinary run in its own directory under it."""
 
 from __future__ import annotations
 
-import io
 import itertools
 import json
-import os
-import shutil
-import socket
-import time
 from datetime import UTC, datetime
 from pathlib import Path
 
 import yaml
-from rich.console import Console
 
 from ..model.compiler import compile_task
 from ..spec import SpecError, SpecIssue, load_spec
-from .rundir import latest_checkpoint
 from .runfiles import RunFileError, read_eval, read_meta
 
 MANIFEST = "sweep.json"
@@ -173,140 +166,3 @@ def read_manifest(sweep: Path) -> dict:
         return json.loads(path.read_text())
     except json.JSONDecodeError as e:
         raise SweepError(f"{path}:{e.lineno}: not valid JSON ({e.msg})") from None
-
-
-def run_trial(config: dict) -> None:
-    """Ray Tune trainable: one ordinary run into its directory (resumed from a checkpoint, skipped if finished)."""
-    import ray
-    import torch
-    from ray import tune
-
-    from .run import resume_run, start_run
-
-    cpus = int(config["cpus"])
-    for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ[var] = str(cpus)
-    torch.set_num_threads(cpus)
-    trial, run = config["trial"], Path(config["sweep"]) / config["trial"]["name"]
-    with (Path(config["sweep"]) / "attempts.log").open("a") as log:
-        log.write(f"{trial['name']} {datetime.now(UTC).isoformat(timespec='seconds')}\n")
-    node = ray.get_runtime_context().get_node_id()
-    t0 = time.perf_counter()
-    if not is_finished(run):
-        quiet = Console(file=io.StringIO())
-        if latest_checkpoint(run) is not None:
-            resume_run(run, quiet, progress=False)
-        else:
-            if run.is_dir():  # a failed or interrupted attempt that left no checkpoint
-                shutil.rmtree(run)
-            overrides = [*trial_overrides(trial), f"train.workers={cpus}"]  # no env processes beyond its CPUs
-            start_run(Path(config["sweep"]) / "spec.yaml", overrides, console=quiet, progress=False, into=run)
-        info = {"trial": trial, "node_id": node, "host": socket.gethostname(), "pid": os.getpid()}
-        info |= {"wall_s": time.perf_counter() - t0, "torch_threads": torch.get_num_threads()}
-        (run / "trial.json").write_text(json.dumps(info, indent=2))
-    agent = read_eval(run)["agent"]
-    tune.report(
-        {
-            "success": agent["success_rate"],
-            "subtasks": agent["subtasks_completed"],
-            "return": agent["return_mean"],
-            "node_id": json.loads((run / "trial.json").read_text())["node_id"],
-        }
-    )
-
-
-def _ray_init(address: str | None, cpus: int) -> bool:
-    """Join the cluster at `address` (or RAY_ADDRESS), else start a local Ray; no dashboard, no usage reporting.
-
-    Returns whether this call connected (and so should disconnect)."""
-    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
-    os.environ.setdefault("RAY_AIR_NEW_OUTPUT", "0")  # the classic reporter: silent at verbose=0
-    address = address or os.environ.get("RAY_ADDRESS") or None
-    if not address:  # a local Ray talks over loopback only (else Ray picks the machine's network address)
-        os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
-    try:
-        import ray
-    except ImportError:
-        raise SweepError("fastrl sweep needs Ray Tune: pip install 'fastrl[sweep]'") from None
-    if ray.is_initialized():
-        return False
-    if address:
-        ray.init(address=address, log_to_driver=False, logging_level="WARNING")
-    else:
-        ray.init(
-            num_cpus=max(os.cpu_count() or 1, cpus),
-            include_dashboard=False,
-            log_to_driver=False,
-            logging_level="WARNING",
-        )
-    return True
-
-
-def _tune_callback():
-    """A Tune callback printing one line per finished, retried or failed trial (picklable: plain print)."""
-    from ray import tune
-
-    class Lines(tune.Callback):
-        def on_trial_complete(self, iteration, trials, trial, **info):
-            r = trial.last_result
-            print(
-                f"done   {trial.config['trial']['name']}  success {r.get('success', float('nan')):.0%}  "
-                f"subtasks {r.get('subtasks', float('nan')):.0%}  node {str(r.get('node_id', '?'))[:8]}",
-                flush=True,
-            )
-
-        def on_trial_recover(self, iteration, trials, trial, **info):
-            print(f"failed {trial.config['trial']['name']}: retrying once", flush=True)
-
-        def on_trial_error(self, iteration, trials, trial, **info):
-            print(f"failed {trial.config['trial']['name']} (after its retry)", flush=True)
-
-    return Lines()
-
-
-def run_sweep(sweep: Path, address: str | None = None, console: Console | None = None) -> list[dict]:
-    """Run every unfinished trial of a sweep folder on Ray Tune (one retry each); return the failed trials."""
-    sweep = Path(sweep).resolve()
-    manifest = read_manifest(sweep)
-    console = console or Console()
-    cpus = int(manifest["cpus_per_trial"])
-    todo = [t for t in manifest["trials"] if not is_finished(sweep / t["name"])]
-    done = len(manifest["trials"]) - len(todo)
-    console.print(f"{len(manifest['trials'])} trials, {done} already finished, {len(todo)} to run", markup=False)
-    if not todo:
-        return []
-    connected = _ray_init(address, cpus)
-    try:
-        return _fit(sweep, todo, cpus)
-    finally:
-        if connected:
-            import ray
-
-            ray.shutdown()
-
-
-def _fit(sweep: Path, todo: list[dict], cpus: int) -> list[dict]:
-    """One Tune experiment over the given trials, each retried once; the failed ones with their last error line."""
-    from ray import tune
-
-    k = 1 + len(list(sweep.glob("tune-*")))
-    tuner = tune.Tuner(
-        tune.with_resources(run_trial, {"cpu": cpus}),
-        param_space={"trial": tune.grid_search(todo), "sweep": str(sweep), "cpus": cpus},
-        # reuse_actors: a worker keeps its imports (torch, SB3, MuJoCo) from one trial to the next
-        tune_config=tune.TuneConfig(trial_dirname_creator=lambda t: t.config["trial"]["name"], reuse_actors=True),
-        run_config=tune.RunConfig(
-            name=f"tune-{k}",
-            storage_path=str(sweep),
-            failure_config=tune.FailureConfig(max_failures=1),
-            verbose=0,
-            callbacks=[_tune_callback()],
-        ),
-    )
-    results = tuner.fit()
-    failed = []
-    for r in results:
-        if r.error is not None:
-            last = (str(r.error).strip().splitlines() or ["?"])[-1]
-            failed.append({"trial": r.config["trial"]["name"], "error": last})
-    return failed
