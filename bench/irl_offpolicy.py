@@ -99,10 +99,8 @@ def run(args) -> None:
     ]
     settings = [dict(kv.split("=", 1) for kv in VARIANTS[v]) for v in args.variants]
     folder = Path(args.root) / f"{datetime.now(UTC).strftime('%Y%m%dT%H%M%SZ')}-sweep"
-    spec = Path("specs/tracelines.yaml")
-    sweep(
-        spec, base, seeds=args.seeds, cpus=args.cpus_per_trial, folder=folder, settings=settings, address=args.address
-    )
+    spec, cpus = Path("specs/tracelines.yaml"), args.cpus_per_trial
+    sweep(spec, base, seeds=args.seeds, cpus=cpus, folder=folder, settings=settings, address=args.address)
 
 
 def variant_of(run_dir: Path) -> str | None:
