@@ -5,7 +5,7 @@
 
 Per spec: two seeded episodes of a seeded random policy, two of the scripted expert, the expert's episode
 replayed through `replay_step`, and an episode continued in a second env after `copy_state_from`; each hashes
-observations, rewards, terminated/truncated and infos. Continuous and rates actions on two specs besides.
+observations, rewards, terminated/truncated and infos. Other action modes and the avatar jitter besides.
 """
 
 from __future__ import annotations
@@ -27,7 +27,13 @@ from fastrl.agents.expert import ScriptedExpert
 
 SPECS = Path(fastrl.__file__).parent / "specs"
 RANDOM_STEPS, EXPERT_STEPS = 120, 400
-EXTRA = (("imagecentring", "continuous"), ("tracelines", "rates"), ("triangulation", "rates"))
+EXTRA = (  # (spec, label, overrides): other action modes, and the avatar jitter no bundled spec uses
+    ("imagecentring", "continuous", ["actions.mode=continuous"]),
+    ("tracelines", "rates", ["actions.mode=rates"]),
+    ("triangulation", "rates", ["actions.mode=rates"]),
+    ("imagecentring", "jitter", ["task.jitter=[0.01,8]"]),
+    ("triangulation", "jitter", ["task.jitter=[0.01,8]"]),
+)
 
 
 class Digest:
@@ -132,21 +138,21 @@ def late(make) -> str:
 def hashes() -> dict[str, str]:
     """Every hash, keyed spec/mode/what."""
     out = {}
-    runs = [(p.stem, None) for p in sorted(SPECS.glob("*.yaml"))] + list(EXTRA)
-    for name, mode in runs:
+    runs = [(p.stem, "own", []) for p in sorted(SPECS.glob("*.yaml"))] + list(EXTRA)
+    for name, label, overrides in runs:
         path = str(SPECS / f"{name}.yaml")
 
-        def make(path=path, mode=mode):
-            return fastrl.make(path, actions={"mode": mode}) if mode else fastrl.make(path)
+        def make(path=path, overrides=overrides):
+            return fastrl.make(path, overrides=overrides)
 
-        key = f"{name}/{mode or 'own'}"
+        key = f"{name}/{label}"
         env = make()
         out[f"{key}/random"] = episodes(env, "random", (0, 1), RANDOM_STEPS)
         record: list = []
         out[f"{key}/expert"] = episodes(env, "expert", (2, 3), EXPERT_STEPS, record)
         out[f"{key}/replay"] = replayed(make(), record)
         out[f"{key}/continued"] = continued(make)
-        if mode is None:
+        if label == "own":
             out[f"{key}/late"] = late(make)
         env.close()
         print(key, {k.rsplit("/", 1)[1]: v for k, v in out.items() if k.startswith(key + "/")}, flush=True)

@@ -4,13 +4,13 @@ import math
 
 import pytest
 
-from fastrl.terms import OBSERVATION_TERMS, REWARD_FEATURES, TaskState, cue_potential, tolerance
+from fastrl.terms import OBSERVATION_TERMS, REWARD_FEATURES, InstrumentState, cue_potential, tolerance
 from fastrl.terms.vec import mat_quat
 
 
-def state(**kw) -> TaskState:
-    """A task state with a few fields set."""
-    s = TaskState()
+def state(**kw) -> InstrumentState:
+    """A task state (the scope's and the instruments', which every term may read) with a few fields set."""
+    s = InstrumentState()
     for k, v in kw.items():
         setattr(s, k, v)
     return s

@@ -50,6 +50,10 @@ class ToolActions:
         """Reset the scope's action state."""
         self.scope.reset(data, qadr)
 
+    def copy_from(self, other: ToolActions) -> None:
+        """Continue with another env's scope action state."""
+        self.scope.copy_from(other.scope)
+
     def targets(self, action, target: list, q: list, model, data) -> list:
         """Servo targets of the scope (first five) and every instrument coordinate."""
         tool_target = np.array(target[5:])

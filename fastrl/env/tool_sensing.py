@@ -68,7 +68,7 @@ class ToolSensor:
                 bad += 0 if self.tool.tip_geom in (g1, g2) and on_target else 1
         s.tool_contacts, s.contacts = bad, scope + bad
         s.tool_in_view = self.in_view(s, p)
-        s.tool_ok = s.tool_touching and bad == 0
+        s.task_ok = s.tool_touching and bad == 0
         s.tool_potential = -s.tool_distance / TOOL_SCALE
         if len(self.touches) == 1:
             s.tools_to_target, s.tools_touching, s.tools_in_view = d, (s.tool_touching,), (s.tool_in_view,)
