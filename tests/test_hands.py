@@ -71,7 +71,7 @@ def test_probe_tip_collides_with_the_plate():
     for _ in range(40):
         _, _, _, _, info = env.step(push)
     assert u.data.xpos[t.tip_body][2] > 0.0  # held on the plate by the contact, not through it
-    assert info["contacts"] >= 1 and u.state.tool_contacts >= 1 and info["features"]["tool_contact"] == 1.0
+    assert info["contacts"] >= 1 and u.state.instrument_contacts >= 1 and info["features"]["tool_contact"] == 1.0
 
 
 def test_observation_holds_the_probe_tip_and_its_target_vector():
@@ -80,7 +80,7 @@ def test_observation_holds_the_probe_tip_and_its_target_vector():
     s = env.unwrapped.state
     names = env.unwrapped.task_spec.observation.terms()
     assert {"tool_tip_pos", "tool_tip_quat", "tool_tip_vel", "tool_to_target"} <= set(names)
-    np.testing.assert_allclose(np.add(s.tool_pos, s.tool_to_target), s.target_pos, atol=1e-12)
+    np.testing.assert_allclose(np.add(s.instrument_pos, s.instrument_to_target), s.target_pos, atol=1e-12)
     assert obs.shape == env.observation_space.shape
 
 

@@ -7,8 +7,8 @@ import numpy as np
 
 from ..terms.state import InstrumentState
 from .dome_task import DomeTask
-from .tool_actions import ToolActions
-from .tool_sensing import ToolSensor, place_tools, tool_start
+from .instrument_actions import InstrumentActions
+from .instrument_sensing import InstrumentSensor, instrument_start, place_instrument_joints
 
 
 class InstrumentTask(DomeTask):
@@ -18,33 +18,33 @@ class InstrumentTask(DomeTask):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.tools = ToolSensor(self.compiled)
+        self.instrument_sensor = InstrumentSensor(self.compiled)
 
     def make_actions(self):
         """The scope's actions, then every instrument coordinate's."""
         cfg = self.compiled.spec.actions
-        return ToolActions(super().make_actions(), cfg, self.compiled.instruments, self.dt)
+        return InstrumentActions(super().make_actions(), cfg, self.compiled.instruments, self.dt)
 
     def place_start(self, rng: np.random.Generator, options: dict, q: np.ndarray) -> None:
         """The scope, then the instruments at their start (options may give it) plus their noise."""
         super().place_start(rng, options, q)
         tq = options.get("instruments")
-        self.place_instruments(tool_start(self.compiled, rng) if tq is None else np.asarray(tq, float))
+        self.place_instruments(instrument_start(self.compiled, rng) if tq is None else np.asarray(tq, float))
 
     def sense(self, first: bool) -> None:
         """Read the scope, then the instruments."""
         self.sensor.read(self.state, self.model, self.data, first=first)
-        self.tools.read(self.state, self.model, self.data, first=first)
+        self.instrument_sensor.read(self.state, self.model, self.data, first=first)
 
     def retarget(self) -> None:
         """The scope's and the instruments' target-dependent quantities."""
         self.sensor.errors(self.state, self.model, self.data)
-        self.tools.errors(self.state, self.model, self.data)
+        self.instrument_sensor.errors(self.state, self.model, self.data)
 
     def cue(self) -> dict:
         """The cue, with the working instrument touching the target."""
         cue = super().cue()
-        cue["touching"] = self.state.tool_touching
+        cue["touching"] = self.state.instrument_touching
         return cue
 
     def place_instruments(self, q: np.ndarray, positions_only: bool = False) -> None:
@@ -52,7 +52,7 @@ class InstrumentTask(DomeTask):
         n = sum(len(t.qadr) for t in self.compiled.instruments)
         if q.shape != (n,) or not np.isfinite(q).all():
             raise ValueError(f"instrument coordinates must be {n} finite numbers, got {q!r}")
-        self.target = self.target[:5] + place_tools(self.compiled, self.data, q).tolist()
+        self.target = self.target[:5] + place_instrument_joints(self.compiled, self.data, q).tolist()
         self.positions_only = positions_only
         (mujoco.mj_fwdPosition if positions_only else mujoco.mj_forward)(self.model, self.data)
 

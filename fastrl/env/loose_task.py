@@ -75,12 +75,12 @@ class LooseBodies:
         task.t_pos[k] = goal
         if t.subtask == k:
             t.target_pos = tuple(goal.tolist())
-        t.prev_tool_holding, t.tool_holding = t.tool_holding, self.held == k
+        t.prev_instrument_holding, t.instrument_holding = t.instrument_holding, self.held == k
 
     def settle(self, s: TaskState) -> None:
         """After the target moved between the body and the cup: no shaping for the jump itself."""
         if self.switched:
-            s.prev_potential, s.prev_tool_potential = s.potential, s.tool_potential
+            s.prev_potential, s.prev_instrument_potential = s.potential, s.instrument_potential
 
     def over_cup(self, data: mujoco.MjData, k: int) -> bool:
         """Body k is above the cup's floor (in it, or falling into it)."""

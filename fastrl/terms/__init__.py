@@ -1,6 +1,7 @@
 """Pure reward and observation terms over the task state, registered by name."""
 
-from . import observations, rewards, tools  # noqa: F401  (registers the terms)
+from . import observations, rewards  # noqa: I001, F401  (registers the scope's terms, then the instruments')
+from . import instruments  # noqa: F401
 from .registry import OBSERVATION_TERMS, REWARD_FEATURES, Term
 from .rewards import cue_potential, tolerance
 from .state import InstrumentState, TaskState
