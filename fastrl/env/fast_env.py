@@ -212,7 +212,7 @@ class FastEnv(gym.Env):
         s.time = self.steps * self.dt
         family.after_step()
         vals = [fn(s) for fn in self.feature_fns]
-        reward = sum(w * v for w, v in zip(self.weights, vals))
+        reward = sum([w * v for w, v in zip(self.weights, vals)])
         terminated = family.get_termination()
         truncated = not terminated and self.steps >= self.max_steps
         return self._observe(), reward, terminated, truncated, self._info(vals)
