@@ -65,13 +65,13 @@ def test_probe_tip_collides_with_the_plate():
     t = u.task.instruments[0]
     q = np.zeros(4)
     q[:3] = aim(t.point, t.rot, np.array([0.03, 0.03, 0.0]), 0.01)  # 1 cm short of a plate point, aimed at it
-    u._place_tools(q)
+    u.family.place_instruments(q)
     push = np.zeros(env.action_space.shape, np.float32)
     push[7] = 1.0  # the probe's insertion, at full rate: 8 cm more over 2 s
     for _ in range(40):
         _, _, _, _, info = env.step(push)
     assert u.data.xpos[t.tip_body][2] > 0.0  # held on the plate by the contact, not through it
-    assert info["contacts"] >= 1 and u.state.tool_contacts >= 1 and info["features"]["tool_contact"] == 1.0
+    assert info["contacts"] >= 1 and u.state.instrument_contacts >= 1 and info["features"]["tool_contact"] == 1.0
 
 
 def test_observation_holds_the_probe_tip_and_its_target_vector():
@@ -80,7 +80,7 @@ def test_observation_holds_the_probe_tip_and_its_target_vector():
     s = env.unwrapped.state
     names = env.unwrapped.task_spec.observation.terms()
     assert {"tool_tip_pos", "tool_tip_quat", "tool_tip_vel", "tool_to_target"} <= set(names)
-    np.testing.assert_allclose(np.add(s.tool_pos, s.tool_to_target), s.target_pos, atol=1e-12)
+    np.testing.assert_allclose(np.add(s.instrument_pos, s.instrument_to_target), s.target_pos, atol=1e-12)
     assert obs.shape == env.observation_space.shape
 
 
@@ -125,6 +125,13 @@ def test_observation_holds_every_instruments_tip_velocity_and_target_vector():
 def test_instrument_terms_need_an_instrument():
     with pytest.raises(SpecError, match=r"observation.extra.0: 'tool_tip_pos' observes the instruments"):
         load_spec(spec_file("tracelines"), ["observation.extra=[tool_tip_pos]"])
+    for field, set_ in (  # the scope's families keep no instrument state: a term of one is refused at load
+        ("reward.features.tool_touch", "reward.features.tool_touch={weight: 1.0}"),
+        ("observation.extra.0", "observation.extra=[tool_holding]"),
+    ):
+        with pytest.raises(SpecError, match=field):
+            load_spec(spec_file("tracelines"), [set_])
+    assert "tool_touch" in load_spec(spec_file("triangulation")).reward.features
 
 
 def test_instrument_errors_name_their_field(tmp_path):

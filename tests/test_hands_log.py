@@ -31,7 +31,7 @@ def test_endoscope_image_shows_the_probe():
     with_probe = u.render().astype(int)
     q = u.instrument_coordinates()
     q[2] = u.task.instruments[0].ranges[2, 0]  # pulled back to the portal: out of the view
-    u._place_tools(q)
+    u.family.place_instruments(q)
     without = u.render().astype(int)
     changed = (np.abs(with_probe - without).sum(axis=2) > 60).mean()
     assert changed > 0.005, changed  # the probe's shaft and tip cover part of the image

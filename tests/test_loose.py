@@ -41,7 +41,7 @@ def _grasper_at(env, target, jaw):
     t = u.task.instruments[0]
     q = np.zeros(5)
     q[:3], q[4] = aim(t.point, t.rot, target, 0.0), jaw
-    u._place_tools(q)
+    u.family.place_instruments(q)
 
 
 def _close(env, steps=15):

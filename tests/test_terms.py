@@ -4,13 +4,13 @@ import math
 
 import pytest
 
-from fastrl.terms import OBSERVATION_TERMS, REWARD_FEATURES, TaskState, cue_potential, tolerance
+from fastrl.terms import OBSERVATION_TERMS, REWARD_FEATURES, InstrumentState, cue_potential, tolerance
 from fastrl.terms.vec import mat_quat
 
 
-def state(**kw) -> TaskState:
-    """A task state with a few fields set."""
-    s = TaskState()
+def state(**kw) -> InstrumentState:
+    """A task state (the scope's and the instruments', which every term may read) with a few fields set."""
+    s = InstrumentState()
     for k, v in kw.items():
         setattr(s, k, v)
     return s
@@ -81,13 +81,13 @@ def test_observation_terms_have_their_declared_sizes():
     for name, term in OBSERVATION_TERMS.items():
         assert len(term.fn(s)) == term.width([]), name
     two = state(  # a probe (4 coordinates) and a grasper (5)
-        tools_pos=(0.0,) * 6,
-        tools_quat=(1.0, 0.0, 0.0, 0.0) * 2,
-        tools_vel=(0.0,) * 6,
-        tools_to_target=(0.0,) * 6,
-        tools_touching=(True, False),
-        tools_in_view=(False, True),
-        tools_portal=(0.0,) * 9,
+        instruments_pos=(0.0,) * 6,
+        instruments_quat=(1.0, 0.0, 0.0, 0.0) * 2,
+        instruments_vel=(0.0,) * 6,
+        instruments_to_target=(0.0,) * 6,
+        instruments_touching=(True, False),
+        instruments_in_view=(False, True),
+        instruments_portal=(0.0,) * 9,
     )
     for name, term in OBSERVATION_TERMS.items():
         assert len(term.fn(two)) == term.width([4, 5]), name

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from ..env.tool_actions import SCOPE_BOX, SCOPE_DISCRETE
+from ..env.instrument_actions import SCOPE_BOX, SCOPE_DISCRETE
 from ..model.instruments import aim
 
 PIVOT_SAFE = 0.045  # insertion (m) at which the tip pivots clear of the shell and the plate
@@ -45,7 +45,7 @@ class TwoHandExpert:
         if self.mode == "discrete":
             return self._discrete(scope_err, tool_err)
         scope = self.scope.to_action(scope_err)
-        step = env.actions.tool_step
+        step = env.actions.instrument_step
         tool = np.clip(0.5 * tool_err / step, -1.0, 1.0)
         return np.concatenate([np.asarray(scope, np.float32).reshape(SCOPE_BOX[self.mode]), tool]).astype(np.float32)
 
@@ -84,7 +84,7 @@ class TwoHandExpert:
 
     def _discrete(self, scope_err: np.ndarray, tool_err: np.ndarray) -> int:
         """One increment: the scope's or the instrument's largest, alternating."""
-        step = self.env.actions.tool_step
+        step = self.env.actions.instrument_step
         ratio = tool_err / step
         j = int(np.argmax(np.abs(ratio)))
         tool = SCOPE_DISCRETE + 2 * j + (0 if tool_err[j] > 0 else 1) if abs(ratio[j]) > 0.6 else 0

@@ -49,6 +49,9 @@ class DiscreteActions:
     def reset(self, data: mujoco.MjData, qadr: np.ndarray) -> None:
         """Nothing to reset."""
 
+    def copy_from(self, other: DiscreteActions) -> None:
+        """Nothing to copy: no action state."""
+
     def targets(self, action, target: list, q: list, model, data) -> list:
         """New servo targets: one increment, kept within the limits and a few steps of the pose."""
         try:
@@ -80,6 +83,10 @@ class ContinuousActions:
     def reset(self, data: mujoco.MjData, qadr: np.ndarray) -> None:
         """Start at rest."""
         self.twist[:] = 0.0
+
+    def copy_from(self, other: ContinuousActions) -> None:
+        """Continue with another env's commanded twist."""
+        self.twist[:] = other.twist
 
     def targets(self, action, target: list, q: list, model, data) -> list:
         """Integrate the commanded tip twist, map it through the portal Jacobian to servo targets."""
@@ -130,6 +137,9 @@ class RateActions:
 
     def reset(self, data: mujoco.MjData, qadr: np.ndarray) -> None:
         """Nothing to reset: the servos hold the pose."""
+
+    def copy_from(self, other: RateActions) -> None:
+        """Nothing to copy: no action state."""
 
     def targets(self, action, target: list, q: list, model, data) -> list:
         """Servo targets moved by rate x dt, kept within the limits and a few steps of the pose."""

@@ -11,15 +11,15 @@ def cue_checks(s: TaskState) -> tuple[bool, bool, bool]:
 
 
 def cue_green(s: TaskState) -> bool:
-    """Every tolerance holds, and the instrument (if any) touches the target and nothing else."""
+    """Every tolerance holds, and the family's own condition (an instrument touching the target and nothing else)."""
     c, h, d = cue_checks(s)
-    return c and h and d and s.tool_ok
+    return c and h and d and s.task_ok
 
 
 def update_dwell(s: TaskState, elapsed: float, dt: float) -> float:
     """Set green, dwell fill and completion on the state; return the new dwell time elapsed."""
     c, h, d = cue_checks(s)
-    s.green = c and h and d and s.tool_ok
+    s.green = c and h and d and s.task_ok
     elapsed = elapsed + dt if s.green else 0.0
     s.prev_dwell = s.dwell
     s.dwell = 1.0 if s.dwell_time <= 0 else min(1.0, elapsed / s.dwell_time)

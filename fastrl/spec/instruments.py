@@ -51,13 +51,18 @@ def instrument_errors(spec) -> list[tuple[tuple, str, object]]:
 
     import numpy as np
 
-    from ..terms import OBSERVATION_TERMS
+    from ..terms import OBSERVATION_TERMS, REWARD_FEATURES
     from . import geometry as geo
 
     errors = [
         (("observation", "extra", i), f"'{name}' observes the instruments: the spec declares none", name)
         for i, name in enumerate(spec.observation.extra)
-        if OBSERVATION_TERMS[name].per and not spec.instruments
+        if "instruments" in OBSERVATION_TERMS[name].needs and not spec.instruments
+    ]
+    errors += [
+        (("reward", "features", name), f"'{name}' scores the instruments: the spec declares none", name)
+        for name in spec.reward.features
+        if "instruments" in REWARD_FEATURES[name].needs and not spec.instruments
     ]
     portals = {p.name: p for p in spec.scene.portals}
     taken = {spec.scope.portal: "the scope"}

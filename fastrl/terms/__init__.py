@@ -1,8 +1,17 @@
 """Pure reward and observation terms over the task state, registered by name."""
 
-from . import observations, rewards, tools  # noqa: F401  (registers the terms)
+from . import observations, rewards  # noqa: I001, F401  (registers the scope's terms, then the instruments')
+from . import instruments  # noqa: F401
 from .registry import OBSERVATION_TERMS, REWARD_FEATURES, Term
 from .rewards import cue_potential, tolerance
-from .state import TaskState
+from .state import InstrumentState, TaskState
 
-__all__ = ["OBSERVATION_TERMS", "REWARD_FEATURES", "Term", "TaskState", "cue_potential", "tolerance"]
+__all__ = [
+    "OBSERVATION_TERMS",
+    "REWARD_FEATURES",
+    "InstrumentState",
+    "Term",
+    "TaskState",
+    "cue_potential",
+    "tolerance",
+]

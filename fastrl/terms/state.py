@@ -1,10 +1,10 @@
-"""The task state that reward features and observation terms read: plain floats and tuples, no MuJoCo."""
+"""The task states that reward features and observation terms read: plain floats and tuples, no MuJoCo."""
 
 from __future__ import annotations
 
 
 class TaskState:
-    """Everything the terms may read at one control step; the env fills it in place."""
+    """What the scope's terms read at one control step (every family has the scope); its Task fills it in place."""
 
     __slots__ = (
         "time",
@@ -52,27 +52,7 @@ class TaskState:
         "potential",
         "prev_potential",
         "goals",
-        "tool_pos",
-        "tool_quat",
-        "tool_vel",
-        "tool_portal",
-        "tool_to_target",
-        "tool_distance",
-        "tool_touching",
-        "tool_contacts",
-        "tool_in_view",
-        "tool_ok",
-        "tool_potential",
-        "prev_tool_potential",
-        "tool_holding",
-        "prev_tool_holding",
-        "tools_pos",
-        "tools_quat",
-        "tools_vel",
-        "tools_to_target",
-        "tools_touching",
-        "tools_in_view",
-        "tools_portal",
+        "task_ok",
     )
 
     def __init__(self):
@@ -97,15 +77,7 @@ class TaskState:
         self.line_deviation = self.ray_fraction = 0.0
         self.potential = self.prev_potential = 0.0
         self.goals = z3
-        self.tool_pos = self.tool_vel = self.tool_to_target = z3
-        self.tool_quat, self.tool_portal = (1.0, 0.0, 0.0, 0.0), (0.0,) * 4
-        self.tool_distance, self.tool_touching, self.tool_contacts, self.tool_in_view = 0.0, False, 0, False
-        self.tool_ok = True  # no instrument: the cue never waits on one
-        self.tool_potential = self.prev_tool_potential = 0.0
-        self.tool_holding = self.prev_tool_holding = False
-        # every instrument, spec order, flattened (the working one first): what the per-instrument terms read
-        self.tools_pos = self.tools_vel = self.tools_to_target = self.tools_quat = self.tools_portal = ()
-        self.tools_touching = self.tools_in_view = ()
+        self.task_ok = True  # the family's own condition for green (an instrument on the target): none here
 
     @property
     def distance_error(self) -> float:
@@ -115,3 +87,55 @@ class TaskState:
         if self.distance > self.dist_hi:
             return self.distance - self.dist_hi
         return 0.0
+
+    def copy_from(self, other: TaskState) -> None:
+        """Take every field of another state of the same kind."""
+        for name in _fields(type(self)):
+            setattr(self, name, getattr(other, name))
+
+
+class InstrumentState(TaskState):
+    """The scope's state and the instruments': what the instrument families' terms read."""
+
+    __slots__ = (
+        "instrument_pos",
+        "instrument_quat",
+        "instrument_vel",
+        "instrument_portal",
+        "instrument_to_target",
+        "instrument_distance",
+        "instrument_touching",
+        "instrument_contacts",
+        "instrument_in_view",
+        "instrument_potential",
+        "prev_instrument_potential",
+        "instrument_holding",
+        "prev_instrument_holding",
+        "instruments_pos",
+        "instruments_quat",
+        "instruments_vel",
+        "instruments_to_target",
+        "instruments_touching",
+        "instruments_in_view",
+        "instruments_portal",
+    )
+
+    def __init__(self):
+        super().__init__()
+        z3 = (0.0, 0.0, 0.0)
+        self.instrument_pos = self.instrument_vel = self.instrument_to_target = z3
+        self.instrument_quat, self.instrument_portal = (1.0, 0.0, 0.0, 0.0), (0.0,) * 4
+        self.instrument_distance, self.instrument_contacts = 0.0, 0
+        self.instrument_touching = self.instrument_in_view = False
+        self.instrument_potential = self.prev_instrument_potential = 0.0
+        self.instrument_holding = self.prev_instrument_holding = False
+        # every instrument, spec order, flattened (the working one first): what the per-instrument terms read
+        self.instruments_pos = self.instruments_vel = self.instruments_to_target = self.instruments_quat = (
+            self.instruments_portal
+        ) = ()
+        self.instruments_touching = self.instruments_in_view = ()
+
+
+def _fields(cls: type) -> tuple[str, ...]:
+    """Every slot of a state class and its bases."""
+    return tuple(n for c in reversed(cls.__mro__) for n in c.__dict__.get("__slots__", ()))

@@ -1,4 +1,4 @@
-"""LooseBodies in the env: grasping (a weld switched on when the jaws close on a body), release, the cup."""
+"""The grasping tasks (LooseBodies): a grasper takes each loose body (a weld switched on) and drops it in the cup."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import numpy as np
 
 from ..model.compiler import CompiledTask
 from ..terms.state import TaskState
+from .instrument_task import InstrumentTask
 
 CLOSED, OPEN = math.radians(8.0), math.radians(20.0)  # jaw below: closed; above: open
 GRAB = 0.007  # the tip closes on a body within this distance of its centre (m)
@@ -55,9 +56,9 @@ class LooseBodies:
             data.qpos[adr : adr + 7] = np.concatenate([pose[:3], q])
             data.qvel[dof : dof + 6] = 0.0
 
-    def update(self, env, k: int) -> None:
+    def update(self, task: LooseBodiesTask, k: int) -> None:
         """Grasp or release body k by the jaw, and move subtask k's target to the body or, once held, the cup."""
-        m, d = env.model, env.data
+        m, d = task.model, task.data
         jaw = float(d.qpos[self.grasper.qadr[4]])
         tip = d.xpos[self.grasper.tip_body]
         body = d.xpos[self.bodies[k]]
@@ -70,16 +71,16 @@ class LooseBodies:
         on_cup = self.held == k or self.over_cup(d, k)
         self.switched, self.on_cup = on_cup != self.on_cup, on_cup
         goal = self.cup if on_cup else body
-        t = env.state
-        env.t_pos[k] = goal
+        t = task.state
+        task.t_pos[k] = goal
         if t.subtask == k:
             t.target_pos = tuple(goal.tolist())
-        t.prev_tool_holding, t.tool_holding = t.tool_holding, self.held == k
+        t.prev_instrument_holding, t.instrument_holding = t.instrument_holding, self.held == k
 
     def settle(self, s: TaskState) -> None:
         """After the target moved between the body and the cup: no shaping for the jump itself."""
         if self.switched:
-            s.prev_potential, s.prev_tool_potential = s.potential, s.tool_potential
+            s.prev_potential, s.prev_instrument_potential = s.potential, s.instrument_potential
 
     def over_cup(self, data: mujoco.MjData, k: int) -> bool:
         """Body k is above the cup's floor (in it, or falling into it)."""
@@ -106,3 +107,38 @@ class LooseBodies:
         m.eq_data[w, 6:10] = q
         d.eq_active[w] = 1
         self.held = k
+
+
+class LooseBodiesTask(InstrumentTask):
+    """The instrument task with a grasper and loose bodies: each body's target is the body, then the cup."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.loose = LooseBodies(self.compiled)
+
+    def place_start(self, rng: np.random.Generator, options: dict, q: np.ndarray) -> None:
+        """Bodies back on their spots (or where options put them), nothing held; the scope and the instruments."""
+        self.loose.reset(self.data)
+        super().place_start(rng, options, q)
+        if options.get("bodies") is not None:
+            self.loose.place(self.data, options["bodies"])
+            mujoco.mj_forward(self.model, self.data)
+
+    def sense(self, first: bool) -> None:
+        """Grasp or release, read the scope and the instruments; green waits on the body resting in the cup."""
+        k = min(self.done_count, len(self.t_pos) - 1)
+        self.loose.update(self, k)
+        super().sense(first)
+        s = self.state
+        s.task_ok = self.loose.done(s, self.data, k)
+        self.loose.settle(s)
+
+    def place_recorded(self, portal, instruments=None, bodies=None) -> None:
+        """Replay: the bodies (if recorded), the scope and the instruments."""
+        if bodies is not None:
+            self.loose.place(self.data, bodies)
+        super().place_recorded(portal, instruments)
+
+    def body_poses(self) -> np.ndarray:
+        """Every body's position and quaternion (wxyz), (k, 7)."""
+        return self.loose.poses(self.data)

@@ -24,18 +24,18 @@ def coordinate_steps(cfg: Actions, kind: str, k: int) -> np.ndarray:
     return np.array([lin if d is None else math.radians(d) for d in deg][:k])
 
 
-class ToolActions:
+class InstrumentActions:
     """The scope's actions (first) and every instrument's: discrete +/- steps, or coordinate rates in [-1, 1]."""
 
-    def __init__(self, scope, cfg: Actions, tools: list[InstrumentHandles], dt: float):
-        self.scope, self.tools, self.mode = scope, tools, cfg.mode
-        self.sizes = [len(t.qadr) for t in tools]
-        self.qadr = np.concatenate([t.qadr for t in tools])
-        self.tool_lo = np.concatenate([t.ranges[:, 0] for t in tools])
-        self.tool_hi = np.concatenate([t.ranges[:, 1] for t in tools])
+    def __init__(self, scope, cfg: Actions, instruments: list[InstrumentHandles], dt: float):
+        self.scope, self.instruments, self.mode = scope, instruments, cfg.mode
+        self.sizes = [len(t.qadr) for t in instruments]
+        self.qadr = np.concatenate([t.qadr for t in instruments])
+        self.instrument_lo = np.concatenate([t.ranges[:, 0] for t in instruments])
+        self.instrument_hi = np.concatenate([t.ranges[:, 1] for t in instruments])
         steps = np.concatenate([coordinate_steps(cfg, self.mode, k) for k in self.sizes])
-        self.tool_step = steps if self.mode == "discrete" else steps * dt
-        self.tool_lead = 3.0 * self.tool_step
+        self.instrument_step = steps if self.mode == "discrete" else steps * dt
+        self.instrument_lead = 3.0 * self.instrument_step
         n = len(self.qadr)
         if self.mode == "discrete":
             self.space = spaces.Discrete(SCOPE_DISCRETE + 2 * n)
@@ -50,9 +50,13 @@ class ToolActions:
         """Reset the scope's action state."""
         self.scope.reset(data, qadr)
 
+    def copy_from(self, other: InstrumentActions) -> None:
+        """Continue with another env's scope action state."""
+        self.scope.copy_from(other.scope)
+
     def targets(self, action, target: list, q: list, model, data) -> list:
         """Servo targets of the scope (first five) and every instrument coordinate."""
-        tool_target = np.array(target[5:])
+        instrument_target = np.array(target[5:])
         pose = data.qpos[self.qadr]
         if self.mode == "discrete":
             try:
@@ -66,7 +70,7 @@ class ToolActions:
             scope = self.scope.targets(a if a < SCOPE_DISCRETE else 0, target[:5], q, model, data)
             if a >= SCOPE_DISCRETE:
                 j, sign = divmod(a - SCOPE_DISCRETE, 2)
-                tool_target[j] += self.tool_step[j] * (1.0 if sign == 0 else -1.0)
+                instrument_target[j] += self.instrument_step[j] * (1.0 if sign == 0 else -1.0)
         else:
             a = np.asarray(action, dtype=float).reshape(-1)
             if a.shape != self.space.shape:
@@ -77,16 +81,16 @@ class ToolActions:
                 raise ValueError(f"action has non-finite values: {a.tolist()}")
             k = SCOPE_BOX[self.mode]
             scope = self.scope.targets(a[:k], target[:5], q, model, data)
-            tool_target += np.clip(a[k:], -1.0, 1.0) * self.tool_step
-        tool_target = np.clip(tool_target, pose - self.tool_lead, pose + self.tool_lead)
-        return list(scope) + np.clip(tool_target, self.tool_lo, self.tool_hi).tolist()
+            instrument_target += np.clip(a[k:], -1.0, 1.0) * self.instrument_step
+        instrument_target = np.clip(instrument_target, pose - self.instrument_lead, pose + self.instrument_lead)
+        return list(scope) + np.clip(instrument_target, self.instrument_lo, self.instrument_hi).tolist()
 
 
-def tool_meanings(tools: list[InstrumentHandles]) -> list[str]:
+def instrument_meanings(instruments: list[InstrumentHandles]) -> list[str]:
     """Names of the discrete actions past the scope's eleven, e.g. 'probe.pitch+'."""
     signs = {"insertion": ("insert", "retract")}
     out = []
-    for t in tools:
+    for t in instruments:
         for j in t.joints:
             plus, minus = signs.get(j, (f"{j}+", f"{j}-"))
             out += [f"{t.spec.name}.{plus}", f"{t.spec.name}.{minus}"]
