@@ -11,7 +11,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..assess.figures import deviations, draw_path_figures, group_of, plot_distributions
+from ..assess.figures import deviations, draw_path_figures, plot_distributions
 from ..assess.journal import Journal, identity
 from ..assess.references import expert_paths, references_for
 from ..assess.report import SCORING_ERRORS, build_report, csv_text, group_key, problem_text, row, trajectory_files
@@ -19,7 +19,7 @@ from ..assess.scoring import Scorer, TrajectoryScores, normalise
 from ..irl.network_files import has_networks
 from ..spec import load_spec
 from .archive import SAMPLE, Job, gathered, plan_job, sample_note
-from .helper import Helper, journaling, score_shared
+from .helper import Helper, journaling, record_assessment, score_shared
 
 
 @dataclass
@@ -98,14 +98,16 @@ def score_with_helper(
     """Score in two processes taking files from one counter; each journals what it scores. The worker (forked with
     the scorer and its networks) first loads or computes the references, then scores.
 
-    With `pictures`, each process first imports what it will draw with (matplotlib there, Rerun here): the counter
-    shares out the files, so time spent importing now is made up by the other process scoring more."""
+    With `pictures`, each process first imports what it will draw with (matplotlib and Rerun there, matplotlib here):
+    the counter shares out the files, so time spent importing now is made up by the other process scoring more."""
     prepared = helper.prepare(episodes, cache, pictures)
     todo = [job.files[i] for i in job.todo]
     keep = {k for k, i in enumerate(job.todo) if i in job.keep}
     theirs = helper.score_share(todo, Journal(path=job.journal.path, identity=job.journal.identity), keep)
-    if pictures:
-        from ..log import assessment  # noqa: F401 (Rerun and the colour map)
+    if pictures:  # this process draws the distributions
+        from ..assess.figures import _pyplot
+
+        _pyplot()
 
     def after_file() -> bool:
         """Show progress; stop early if the worker could not prepare the references."""
@@ -215,14 +217,13 @@ def assess(
         paths["json"].parent.mkdir(parents=True, exist_ok=True)
         paths["csv"].write_text(csv_text(report))
         result.files["csv"] = paths["csv"]
-        if drawing:  # the distributions figure in the helper too while this process writes the recording
-            from ..log.assessment import log_assessment
-
+        if drawing:  # the recording in the helper, after the path figures, while this process draws the distributions
             t0 = time.perf_counter()
-            late = _run(helper, plot_distributions, report, paths["distributions"])
             rid = recording_id or f"assessment-{scorer.spec.name}"
-            rrd = log_assessment(paths["rrd"], rid, scorer.env.task, kept, report, devs, lambda s: group_of(s, by))
-            result.files |= early.result() | {"distributions": late.result(), "rrd": rrd}
+            recorded = (paths["rrd"], rid, kept, report, devs, by)
+            rrd = helper.record(*recorded) if helper else _run(None, record_assessment, scorer.env.task, *recorded)
+            distributions = plot_distributions(report, paths["distributions"])
+            result.files |= early.result() | {"distributions": distributions, "rrd": rrd.result()}
             seconds["pictures"] += time.perf_counter() - t0
     finally:
         if helper is not None:

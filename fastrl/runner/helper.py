@@ -1,6 +1,6 @@
 """A second process for `fastrl score`, forked with the scorer and its networks: it loads the references, scores files
-taken from a counter shared with this process, and draws the figures while this process writes the report and the
-recording."""
+taken from a counter shared with this process, then draws the path figures and writes the recording while this
+process writes the report and draws the distributions."""
 
 from __future__ import annotations
 
@@ -32,8 +32,9 @@ def _adopt(scorer: Scorer, counter) -> None:
 def _prepare(episodes: int, cache: Path | None, pictures: bool) -> tuple:
     """Worker side of `Helper.prepare`."""
     prepared = references_for(_SCORER, episodes, cache)
-    if pictures:  # import matplotlib now: the files are shared out, so the parent scores more meanwhile
+    if pictures:  # import matplotlib and Rerun now: the files are shared out, so the parent scores more meanwhile
         from ..assess.figures import _pyplot
+        from ..log import assessment  # noqa: F401
 
         _pyplot()
     return prepared
@@ -50,6 +51,19 @@ def _score_share(files: list[Path], journal: Journal | None = None, keep: set[in
         journal.close()
         if orphaned():  # no one will read the result, and the pool's queue would keep this process waiting
             os._exit(0)
+
+
+def _record(*args) -> Path:
+    """Worker side of `Helper.record`."""
+    return record_assessment(_SCORER.env.task, *args)
+
+
+def record_assessment(task, path: Path, recording_id: str, kept: list, report: dict, devs: dict, by: str) -> Path:
+    """The assessment's Rerun recording (paths by learned value, deviations, the report's tables)."""
+    from ..assess.figures import group_of
+    from ..log.assessment import log_assessment
+
+    return log_assessment(path, recording_id, task, kept, report, devs, lambda s: group_of(s, by))
 
 
 def _expert(seeds: list[int]):
@@ -140,6 +154,10 @@ class Helper:
         theirs = self.pool.submit(_expert, seeds[:half])
         mine = compute_expert_paths(self.scorer, seeds[half:])
         return theirs.result() | mine
+
+    def record(self, path: Path, recording_id: str, kept: list, report: dict, devs: dict, by: str) -> Future:
+        """A future of the recording written by `record_assessment` in the worker (after what it was given before)."""
+        return self.pool.submit(_record, path, recording_id, kept, report, devs, by)
 
     def submit(self, fn, *args) -> Future:
         """Run a picklable function in the worker."""
