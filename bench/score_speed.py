@@ -69,10 +69,10 @@ def make_cohort(root: Path) -> Path:
 def timed(cmd: list[str], root: Path = HERE) -> tuple[float, float]:
     """(wall, CPU) seconds of a subprocess running fastrl from `root`, from launch to exit; CPU counts every process
     it waited for."""
-    env = os.environ | {"PYTHONPATH": str(root)}
+    env = os.environ | {"PYTHONPATH": str(root)}  # and run from there: `python -m` puts the working folder first
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    res = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    res = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=root)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if res.returncode != 0:
@@ -84,8 +84,16 @@ class Side:
     """One checkout's command, its timings and its report's seconds."""
 
     def __init__(self, name: str, root: Path, trajectories: Path, run: Path, out: Path):
-        self.name, self.root, self.out = name, root, out / "scores.json"
-        self.cmd = [sys.executable, "-m", "fastrl.cli", "score", str(trajectories), "--run", str(run)]
+        self.name, self.root, self.out = name, root, out.resolve() / "scores.json"
+        self.cmd = [
+            sys.executable,
+            "-m",
+            "fastrl.cli",
+            "score",
+            str(trajectories.resolve()),
+            "--run",
+            str(run.resolve()),
+        ]
         self.cmd += ["-o", str(self.out), "--no-progress"]
         self.walls: list[float] = []
         self.cpus: list[float] = []
@@ -138,6 +146,12 @@ def main() -> None:
     print(f"machine: {machine()}")
     print(f"run: {run}\ntrajectories: {trajectories} ({n} files)\ncommand: {' '.join(sides[-1].cmd[1:])}")
     imports = [sys.executable, "-c", "import fastrl.runner.assessment"]
+    for side in sides:
+        where = [sys.executable, "-c", "import fastrl; print(fastrl.__file__)"]
+        found = subprocess.run(
+            where, capture_output=True, text=True, cwd=side.root, env=os.environ | {"PYTHONPATH": str(side.root)}
+        )
+        print(f"{side.name}: fastrl from {found.stdout.strip()}")
     startup = {s.name: statistics.median(timed(imports, s.root)[0] for _ in range(3)) for s in sides}
     for side in sides:
         cold, cold_cpu = timed(side.cmd, side.root)
