@@ -2,14 +2,18 @@
 
     python bench/score_speed.py                                  # makes an AIRL run and a 5 x 20 TraceLines cohort
     python bench/score_speed.py --run RUN_DIR --trajectories DIR --repeats 7
+    python bench/score_speed.py --run RUN_DIR --trajectories DIR --reference /work/ref-b712   # beside a reference
 
 Without --run, a small AIRL run of TraceLines (`fastrl irl ... --timesteps 4096`; the cost of scoring does not
 depend on how well it learned) is made under runs/bench-score; without --trajectories, a synthetic cohort
 (`fastrl cohort --levels 5 --per-level 20`). Each repeat runs `python -m fastrl.cli score DIR --run RUN` as a
 subprocess and times it from launch to exit; the first run fills the run's caches (reference scores, the scripted
-expert's paths per seed) and is reported apart as the cold run. Prints the machine and its load, the median, best and
-worst warm wall times, the CPU time of the command (both processes), and the breakdown: Python with fastrl's imports,
-loading the run, scoring (replay and networks), the report, and figures + recording (from scores.json's seconds).
+expert's paths per seed) and is reported apart as the cold run. With --reference (a checkout of another commit, e.g.
+`git worktree add /work/ref-b712 b712f6b`), the same command from that checkout (PYTHONPATH pointing at it) runs
+interleaved with this one, each repeat one of each, into its own output folder. Prints the machine and its load, the
+median, best and worst warm wall times, the CPU time of the command (both processes), and the breakdown: Python with
+fastrl's imports, loading the run, scoring (replay and networks), the report, and figures + recording (from
+scores.json's seconds).
 """
 
 from __future__ import annotations
@@ -17,7 +21,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import resource
 import statistics
 import subprocess
@@ -25,18 +28,15 @@ import sys
 import time
 from pathlib import Path
 
+from common import machine_line
+
+HERE = Path(__file__).resolve().parent.parent  # this checkout: its fastrl is the one timed
 ROOT = Path("runs/bench-score")
 
 
 def machine() -> str:
     """CPU model, cores and the load averages now."""
-    model = platform.processor() or "?"
-    try:
-        model = next(line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
-    return f"{model}, {os.cpu_count()} cores, load average {load}, Python {platform.python_version()}"
+    return machine_line()
 
 
 def fastrl(*args: str) -> subprocess.CompletedProcess:
@@ -66,16 +66,65 @@ def make_cohort(root: Path) -> Path:
     return out
 
 
-def timed(cmd: list[str]) -> tuple[float, float]:
-    """(wall, CPU) seconds of a subprocess, from launch to exit; CPU counts every process it waited for."""
+def timed(cmd: list[str], root: Path = HERE) -> tuple[float, float]:
+    """(wall, CPU) seconds of a subprocess running fastrl from `root`, from launch to exit; CPU counts every process
+    it waited for."""
+    env = os.environ | {"PYTHONPATH": str(root)}  # and run from there: `python -m` puts the working folder first
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    res = subprocess.run(cmd, capture_output=True, text=True)
+    res = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=root)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if res.returncode != 0:
         sys.exit(f"{' '.join(cmd)} failed:\n{res.stdout}\n{res.stderr}")
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+class Side:
+    """One checkout's command, its timings and its report's seconds."""
+
+    def __init__(self, name: str, root: Path, trajectories: Path, run: Path, out: Path):
+        self.name, self.root, self.out = name, root, out.resolve() / "scores.json"
+        self.cmd = [
+            sys.executable,
+            "-m",
+            "fastrl.cli",
+            "score",
+            str(trajectories.resolve()),
+            "--run",
+            str(run.resolve()),
+        ]
+        self.cmd += ["-o", str(self.out), "--no-progress"]
+        self.walls: list[float] = []
+        self.cpus: list[float] = []
+        self.seconds: list[dict] = []
+
+    def time_once(self) -> None:
+        """One timed run of the command."""
+        wall, cpu = timed(self.cmd, self.root)
+        self.walls.append(wall)
+        self.cpus.append(cpu)
+        self.seconds.append(json.loads(self.out.read_text())["seconds"])
+
+    def summary(self) -> str:
+        """Median (best, worst) wall and median CPU."""
+        return (
+            f"median {statistics.median(self.walls):.2f} s wall (best {min(self.walls):.2f}, worst "
+            f"{max(self.walls):.2f}, {len(self.walls)} runs), CPU {statistics.median(self.cpus):.2f} s"
+        )
+
+    def breakdown(self, startup: float) -> list[str]:
+        """The report's seconds of the median run, and the rest."""
+        median = statistics.median(self.walls)
+        seconds = self.seconds[self.walls.index(sorted(self.walls)[len(self.walls) // 2])]
+        lines = [f"  python + imports             {startup:6.2f}   (python -c 'import fastrl.runner.assessment')"]
+        lines += [
+            f"  {k:28s} {seconds[k]:6.2f}"
+            for k in ("load", "references", "scoring", "report", "pictures")
+            if k in seconds
+        ]
+        lines.append(f"  {'rest (CLI, JSON, exit)':28s} {median - startup - sum(seconds.values()):6.2f}")
+        return lines
 
 
 def main() -> None:
@@ -84,37 +133,40 @@ def main() -> None:
     ap.add_argument("--trajectories", type=Path, help="a folder of .npz (default: make a 5 x 20 cohort)")
     ap.add_argument("--repeats", type=int, default=5, help="warm runs timed (median reported)")
     ap.add_argument("--out", type=Path, default=ROOT / "out", help="where the score outputs go")
+    ap.add_argument("--reference", type=Path, help="a checkout of the reference commit, timed interleaved")
     args = ap.parse_args()
     run = args.run or make_run(ROOT)
     trajectories = args.trajectories or make_cohort(ROOT)
     n = len(list(trajectories.glob("*.npz")))
-    out = args.out / "scores.json"
-    cmd = [sys.executable, "-m", "fastrl.cli", "score", str(trajectories), "--run", str(run), "-o", str(out)]
-    cmd.append("--no-progress")
+    sides = [Side("this checkout", HERE, trajectories, run, args.out)]
+    if args.reference is not None:
+        sides.insert(
+            0, Side(f"reference {args.reference}", args.reference.resolve(), trajectories, run, args.out / "reference")
+        )
     print(f"machine: {machine()}")
-    print(f"run: {run}\ntrajectories: {trajectories} ({n} files)\ncommand: {' '.join(cmd[1:])}")
-    startup = statistics.median(timed([sys.executable, "-c", "import fastrl.runner.assessment"])[0] for _ in range(3))
-    cold, cold_cpu = timed(cmd)
-    print(f"first run (fills the run's caches if empty): {cold:.2f} s wall, {cold_cpu:.2f} s CPU")
-    walls, cpus, breakdowns = [], [], []
+    print(f"run: {run}\ntrajectories: {trajectories} ({n} files)\ncommand: {' '.join(sides[-1].cmd[1:])}")
+    imports = [sys.executable, "-c", "import fastrl.runner.assessment"]
+    for side in sides:
+        where = [sys.executable, "-c", "import fastrl; print(fastrl.__file__)"]
+        found = subprocess.run(
+            where, capture_output=True, text=True, cwd=side.root, env=os.environ | {"PYTHONPATH": str(side.root)}
+        )
+        print(f"{side.name}: fastrl from {found.stdout.strip()}")
+    startup = {s.name: statistics.median(timed(imports, s.root)[0] for _ in range(3)) for s in sides}
+    for side in sides:
+        cold, cold_cpu = timed(side.cmd, side.root)
+        print(f"{side.name}: first run (fills the run's caches if empty): {cold:.2f} s wall, {cold_cpu:.2f} s CPU")
     for _ in range(args.repeats):
-        wall, cpu = timed(cmd)
-        walls.append(wall)
-        cpus.append(cpu)
-        breakdowns.append(json.loads(out.read_text())["seconds"])
-    median = statistics.median(walls)
-    seconds = breakdowns[walls.index(sorted(walls)[len(walls) // 2])]
-    print(
-        f"fastrl score, {n} trajectories, whole command: median {median:.2f} s wall (best {min(walls):.2f}, "
-        f"worst {max(walls):.2f}, {args.repeats} runs), CPU {statistics.median(cpus):.2f} s"
-    )
-    print("breakdown of the median run (s):")
-    print(f"  python + imports             {startup:6.2f}   (python -c 'import fastrl.runner.assessment', median of 3)")
-    for key in ("load", "references", "scoring", "report", "pictures"):
-        if key in seconds:
-            print(f"  {key:28s} {seconds[key]:6.2f}")
-    rest = median - startup - sum(seconds.values())
-    print(f"  {'rest (CLI, JSON, exit)':28s} {rest:6.2f}")
+        for side in sides:
+            side.time_once()
+    for side in sides:
+        print(f"fastrl score, {n} trajectories, whole command, {side.name}: {side.summary()}")
+    if len(sides) == 2:
+        ratio = statistics.median(sides[1].walls) / statistics.median(sides[0].walls)
+        print(f"this checkout / reference, median wall: {ratio:.2f}")
+    for side in sides:
+        print(f"breakdown of the median run, {side.name} (s):")
+        print("\n".join(side.breakdown(startup[side.name])))
     print(f"load average after: {', '.join(f'{x:.2f}' for x in os.getloadavg())}")
 
 

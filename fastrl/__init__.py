@@ -6,6 +6,9 @@ import os
 
 if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
     os.environ.setdefault("MUJOCO_GL", "egl")  # offscreen rendering on headless machines (before mujoco loads)
+# numpy's matrix products are small here (the exported networks, evaluated in numpy by `fastrl score`): OpenBLAS's
+# threads cost more than they save, twice so beside a second process on the other core (before numpy loads)
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import gymnasium  # noqa: E402
 

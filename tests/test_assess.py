@@ -275,23 +275,28 @@ def test_scoring_in_two_processes_gives_the_same_report_in_the_same_order(scorer
     assert len(reports[1]["problems"]) == 1 and "t1b.npz" in reports[1]["problems"][0]
 
 
-def test_a_run_scored_in_two_processes_gives_the_same_report_and_this_process_never_imports_torch(airl_run, tmp_path):
+def test_a_run_scored_in_two_processes_gives_the_same_report_and_neither_process_imports_torch(airl_run, tmp_path):
     scorer = Scorer(load_spec(airl_run / "spec.yaml"))
     for i, (level, noise) in enumerate(((2, 0.0), (1, 0.7), (2, 0.2))):
         degraded(scorer, 20 + i, noise, level).save(tmp_path / "in" / f"t{i}.npz")
     here = tmp_path / "here" / "scores.json"
     assess([tmp_path / "in"], run=airl_run, output=here, reference_episodes=1, pictures=False, parallel=False)
     two = tmp_path / "two" / "scores.json"
-    script = (  # a fresh interpreter: this one has torch already
-        "import json, sys; from pathlib import Path; from fastrl.runner.assessment import assess; "
-        f"assess([Path({str(tmp_path / 'in')!r})], run=Path({str(airl_run)!r}), output=Path({str(two)!r}), "
-        "reference_episodes=1, progress=False, parallel=True); "
-        "print(json.dumps([m for m in ('torch', 'stable_baselines3', 'ray', 'pandas', 'matplotlib.pyplot') "
-        "if m in sys.modules]))"
+    script = (  # the whole command in a fresh interpreter (this one has torch already), forced to use the helper
+        "import sys; from fastrl.runner import helper; helper.MIN_FILES = 2; from fastrl.cli import app; "
+        "app(sys.argv[1:])"
     )
-    res = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    args = ["score", str(tmp_path / "in"), "--run", str(airl_run), "-o", str(two), "--references", "1"]
+    res = subprocess.run(  # -X importtime: every module imported, by this process and the forked helper alike
+        [sys.executable, "-X", "importtime", "-c", script, *args, "--no-progress"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert res.returncode == 0, res.stderr
-    assert json.loads(res.stdout.splitlines()[-1]) == []  # the worker imported torch and pyplot, not this process
+    imported = {line.split("|")[-1].strip() for line in res.stderr.splitlines() if line.startswith("import time:")}
+    assert "safetensors.numpy" in imported  # the networks were loaded
+    assert not {"torch", "stable_baselines3", "ray"} & imported  # numpy evaluates the networks
     reports = [{k: v for k, v in json.loads(p.read_text()).items() if k != "seconds"} for p in (here, two)]
     assert reports[0] == reports[1]  # bit for bit: each trajectory's networks evaluated alone, in either process
     assert all(r["reward_raw"] is not None and r["value_raw"] is not None for r in reports[1]["trajectories"])

@@ -1,5 +1,5 @@
-"""Pickle-free export of IRL networks: the loaded policy, value and reward reproduce SB3 and the discriminator;
-safetensors files load without fastrl."""
+"""Pickle-free export of IRL networks: the loaded policy, value and reward (evaluated with numpy) reproduce SB3 and
+the discriminator (torch) to float32 tolerance; safetensors files load without fastrl."""
 
 import json
 import re

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import shutil
@@ -19,6 +18,7 @@ from ..atomic import DiskFull, atomic_write, fsync_dir, is_disk_full, write_json
 from ..env.fast_env import FastEnv
 from ..spec.models import TaskSpec
 from ..spec.training import Encoder
+from .checkpoint_files import checkpoint_problem, file_sha256
 from .encoder import PixelEncoder
 from .lean_sac import LeanSAC
 from .workers import FreshInfoVecEnv, SplitVecEnv
@@ -131,44 +131,6 @@ def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict,
         raise
     fsync_dir(path.parent)
     return path
-
-
-def file_sha256(path: Path) -> str:
-    """Hex sha256 of a file's bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
-def checkpoint_problem(path: Path) -> str | None:
-    """Why a checkpoint directory cannot be loaded (missing, torn or damaged files), or None if it is whole."""
-    path = Path(path)
-    try:
-        state = json.loads((path / "state.json").read_text())
-    except FileNotFoundError:
-        return "no state.json (it was being written when the run stopped)"
-    except (OSError, ValueError) as e:
-        return f"state.json does not parse ({e})"
-    if not isinstance(state, dict) or not isinstance(state.get("timesteps"), int):
-        return "state.json has no timesteps"
-    files = state.get("files")
-    if not isinstance(files, dict):  # written before checkpoints listed their files: try loading the weights
-        try:
-            torch.load(path / "weights.pt", map_location="cpu", weights_only=True)
-        except Exception as e:  # any failure to load means the checkpoint is unusable
-            return f"weights.pt does not load ({str(e).splitlines()[0] if str(e) else type(e).__name__})"
-        return None
-    if "weights.pt" not in files:
-        return "state.json lists no weights.pt"
-    for name, digest in files.items():
-        f = path / name
-        if not f.is_file():
-            return f"{name} is missing"
-        if file_sha256(f) != digest:
-            return f"{name} is damaged (its sha256 differs from the one in state.json)"
-    return None
 
 
 class CheckpointMismatch(ValueError):

@@ -85,10 +85,6 @@ class Scorer:
 
     def attach(self, networks) -> None:
         """Score with a run's networks from now on (None: heuristic and kinematic scores only)."""
-        if networks is not None:
-            import torch
-
-            torch.set_num_threads(1)  # small MLPs on one trajectory: extra threads cost 50x on a busy machine
         self.networks = networks
         self.learned = networks is not None and networks.kind is not None
 
@@ -155,10 +151,6 @@ class Scorer:
     def score_file(self, path: Path) -> TrajectoryScores:
         """Load, check and score one file (see load_file)."""
         return self.score(self.load_file(path), Path(path).stem)
-
-    def replay_file(self, path: Path) -> tuple[TrajectoryScores, np.ndarray]:
-        """Load, check and replay one file, all but the learned scores; also its observations."""
-        return self.replayed(self.load_file(path), Path(path).stem)
 
 
 def held_to_limit(traj: Trajectory, spec: TaskSpec, replayed: int) -> Trajectory | None:

@@ -6,7 +6,6 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..agents.expert import ScriptedExpert
 from ..spec import spec_hash, task_hash
 from .episode import EpisodeRecord
 from .loop import EpisodeRecorder, episode_steps
@@ -44,6 +43,8 @@ def rollout_trajectory(
 
 def expert_trajectories(env, seeds) -> list[Trajectory]:
     """Scripted-expert demonstrations, one episode per seed."""
+    from ..agents.expert import ScriptedExpert  # here: scoring a file needs no expert
+
     expert = ScriptedExpert(env)
     meta = {"source": "expert", "subject": "scripted-expert"}
     return [rollout_trajectory(env, expert.act, s, meta, expert.reset)[0] for s in seeds]

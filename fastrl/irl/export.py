@@ -2,7 +2,7 @@
 
 Each network is one NAME.safetensors file: a flat dict of tensors, with a JSON description in its header metadata
 under "fastrl" (the layer lists, the observation normalisation, how the parts combine). Loading needs only
-safetensors and torch: the MLPs are evaluated with plain torch ops, no stable-baselines3.
+safetensors and numpy (fastrl.irl.networks), or torch (docs/networks.md); no stable-baselines3.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""Load exported networks (NAME.safetensors) and evaluate them with plain torch."""
+"""Load exported networks (NAME.safetensors) and evaluate them with numpy: scoring, cues and the viewer never import
+torch (its import alone costs seconds); training keeps torch and SB3, and the tests check the two agree."""
 
 from __future__ import annotations
 
@@ -8,7 +9,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import torch
 
 from .network_files import has_networks as has_networks  # re-exported: its old home
 
@@ -23,34 +23,34 @@ def file_sha256(path: Path) -> str:
 
 @dataclass(frozen=True)
 class Mlp:
-    """A chain of linear layers and activations evaluated with plain torch ops."""
+    """A chain of linear layers and activations evaluated in float32 with numpy, as torch evaluates them."""
 
     layers: tuple
 
-    def __call__(self, x: torch.Tensor) -> torch.Tensor:
+    def __call__(self, x: np.ndarray) -> np.ndarray:
         for kind, a, b in self.layers:
             if kind == "linear":
-                x = torch.nn.functional.linear(x, a, b)
+                x = x @ a if b is None else x @ a + b
             elif kind == "tanh":
-                x = torch.tanh(x)
+                x = np.tanh(x)
             elif kind == "relu":
-                x = torch.relu(x)
+                x = np.maximum(x, np.float32(0.0))
             else:  # hardtanh
-                x = torch.clamp(x, a, b)
+                x = np.clip(x, np.float32(a), np.float32(b))
         return x
 
 
-def build_mlp(name: str, layers: list[dict], tensors: dict[str, torch.Tensor]) -> Mlp:
+def build_mlp(name: str, layers: list[dict], tensors: dict[str, np.ndarray]) -> Mlp:
     """The part `name` from its JSON layer list and the tensors, checking every shape."""
     built = []
     for i, layer in enumerate(layers):
         kind = layer["type"]
         if kind == "linear":
-            w = tensors[f"{name}.{i}.weight"].float()
-            b = tensors[f"{name}.{i}.bias"].float() if layer["bias"] else None
+            w = np.asarray(tensors[f"{name}.{i}.weight"], np.float32)
+            b = np.asarray(tensors[f"{name}.{i}.bias"], np.float32) if layer["bias"] else None
             if tuple(w.shape) != (layer["out"], layer["in"]) or (b is not None and tuple(b.shape) != (layer["out"],)):
                 raise ValueError(f"layer {name}.{i}: tensor shapes do not match {layer}")
-            built.append(("linear", w, b))
+            built.append(("linear", np.ascontiguousarray(w.T), b))  # x @ W^T, as torch's linear
         elif kind in ("tanh", "relu"):
             built.append((kind, None, None))
         elif kind == "hardtanh":
@@ -65,26 +65,26 @@ class ObsNorm:
     """VecNormalize's observation transform clip((obs - mean) / sqrt(var + eps), -clip, clip); identity if empty."""
 
     obs_dim: int
-    mean: torch.Tensor | None = None
-    var: torch.Tensor | None = None
+    mean: np.ndarray | None = None
+    var: np.ndarray | None = None
     clip: float = 0.0
     epsilon: float = 0.0
 
-    def __call__(self, obs: np.ndarray) -> torch.Tensor:
-        x = torch.as_tensor(np.asarray(obs), dtype=torch.float64)
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        x = np.asarray(obs, dtype=np.float64)
         if x.ndim != 2 or x.shape[1] != self.obs_dim:
             raise ValueError(f"expected a batch of observations of shape (n, {self.obs_dim}), got {tuple(x.shape)}")
         if self.mean is not None:
-            x = torch.clamp((x - self.mean) / torch.sqrt(self.var + self.epsilon), -self.clip, self.clip)
-        return x.float()
+            x = np.clip((x - self.mean) / np.sqrt(self.var + self.epsilon), -self.clip, self.clip)
+        return x.astype(np.float32)
 
 
-def build_norm(meta: dict, tensors: dict[str, torch.Tensor]) -> ObsNorm:
+def build_norm(meta: dict, tensors: dict[str, np.ndarray]) -> ObsNorm:
     """The observation normalisation stored in a pair."""
     obs_dim, norm = int(meta["obs_dim"]), meta["obs_norm"]
     if norm is None:
         return ObsNorm(obs_dim)
-    mean, var = tensors["obs_norm.mean"].double(), tensors["obs_norm.var"].double()
+    mean, var = np.asarray(tensors["obs_norm.mean"], np.float64), np.asarray(tensors["obs_norm.var"], np.float64)
     if mean.shape != (obs_dim,) or var.shape != (obs_dim,):
         raise ValueError(f"normalisation statistics of shape {tuple(mean.shape)}, expected ({obs_dim},)")
     return ObsNorm(obs_dim, mean, var, float(norm["clip"]), float(norm["epsilon"]))
@@ -98,7 +98,7 @@ class Loaded:
     meta: dict
     norm: ObsNorm
     parts: dict[str, Mlp]
-    tensors: dict[str, torch.Tensor]
+    tensors: dict[str, np.ndarray]
 
     def variant(self, key: str, needs: dict[str, tuple[str, ...]]) -> str:
         """meta[key], one of needs' keys, whose required parts or tensors were all saved; else a clear error."""
@@ -111,13 +111,13 @@ class Loaded:
         return value
 
 
-def _read_safetensors(path: Path) -> tuple[dict, dict[str, torch.Tensor]]:
+def _read_safetensors(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
     """The JSON description in a safetensors header and the tensors; the file's sha256 added as its identity."""
     from safetensors import safe_open
-    from safetensors.torch import load_file
+    from safetensors.numpy import load_file
 
     try:
-        with safe_open(str(path), "pt") as f:
+        with safe_open(str(path), "np") as f:
             header = f.metadata() or {}
         tensors = load_file(str(path))
     except Exception as e:  # safetensors reports truncation and bad headers with its own error types
@@ -173,7 +173,7 @@ def reward_members(r: Loaded) -> list[RewardMember]:
                 RewardMember(
                     build_mlp("r_psi", r.meta["parts"]["r_psi"], own),
                     build_mlp("h", r.meta["parts"]["h"], own),
-                    float(own["r_absorbing"]),
+                    float(np.asarray(own["r_absorbing"]).reshape(-1)[0]),
                     build_norm(r.meta, own),
                 )
             )
@@ -185,7 +185,7 @@ def reward_members(r: Loaded) -> list[RewardMember]:
 
 
 class Networks:
-    """An exported run evaluated with plain torch: policy, value, and the learned reward (if saved).
+    """An exported run evaluated with numpy: policy, value, and the learned reward (if saved).
 
     A shaped AIRL reward saved with snapshots from training is their average unless `averaged` is false (then the
     final r_psi and h alone)."""
@@ -233,24 +233,22 @@ class Networks:
     def policy(self, obs: np.ndarray) -> np.ndarray:
         """Deterministic actions for a batch of raw observations."""
         p = self._policy
-        with torch.no_grad():
-            out = p.parts["pi"](p.norm(obs))
-            if self.output == "argmax":
-                return out.argmax(dim=-1).numpy()
-            low, high = p.tensors["action.low"], p.tensors["action.high"]
-            if self.output == "clip":
-                return torch.clamp(out.double(), low, high).numpy().astype(np.float32)
-            return (low + 0.5 * (torch.tanh(out).double() + 1.0) * (high - low)).numpy().astype(np.float32)
+        out = p.parts["pi"](p.norm(obs))
+        if self.output == "argmax":
+            return out.argmax(axis=-1)
+        low, high = p.tensors["action.low"], p.tensors["action.high"]
+        if self.output == "clip":
+            return np.clip(out.astype(np.float64), low, high).astype(np.float32)
+        return (low + 0.5 * (np.tanh(out).astype(np.float64) + 1.0) * (high - low)).astype(np.float32)
 
     def value(self, obs: np.ndarray) -> np.ndarray:
         """The generator's state value V(s) for a batch of raw observations (SAC: Q1(s, a*))."""
         v = self._value
-        with torch.no_grad():
-            x = v.norm(obs)
-            if self.value_form == "state":
-                return v.parts["v"](x).squeeze(-1).numpy()
-            action = torch.tanh(v.parts["pi"](x))
-            return v.parts["q1"](torch.cat([x, action], dim=-1)).squeeze(-1).numpy()
+        x = v.norm(obs)
+        if self.value_form == "state":
+            return v.parts["v"](x)[:, 0]
+        action = np.tanh(v.parts["pi"](x))
+        return v.parts["q1"](np.concatenate([x, action], axis=-1))[:, 0]
 
     def _reward_pair(self) -> Loaded:
         """The reward pair, or a clear error if none was saved."""
@@ -279,39 +277,30 @@ class Networks:
         """The discount saved with the reward."""
         return float(self._reward_pair().meta["gamma"])
 
-    def _states(self, r: Loaded, obs: np.ndarray, key: str = "inputs", norm: ObsNorm | None = None) -> torch.Tensor:
+    def _states(self, r: Loaded, obs: np.ndarray, key: str = "inputs", norm: ObsNorm | None = None) -> np.ndarray:
         """Normalised observations (by `norm`, else the pair's), the columns a network saw (`inputs`, or r_psi's
         `reward_inputs`; all if not saved), with a zero absorbing flag."""
         x = (r.norm if norm is None else norm)(obs)
         columns = r.meta.get(key, r.meta.get("inputs"))
         if columns is not None:
             x = x[:, columns]
-        return torch.cat([x, torch.zeros_like(x[:, :1])], dim=-1)
+        return np.concatenate([x, np.zeros_like(x[:, :1])], axis=-1)
 
     def reward(self, obs: np.ndarray) -> np.ndarray:
         """Per-step reward (T,) of raw observations (T+1, d): AIRL r_psi(s_t), GAIL logit(s_t, s_t+1)."""
         r = self._reward_pair()
-        with torch.no_grad():
-            if r.meta["form"] == "state":
-                return (
-                    torch.stack(
-                        [m.r_psi(self._states(r, obs[:-1], "reward_inputs", m.norm)).squeeze(-1) for m in self._members]
-                    )
-                    .mean(0)
-                    .numpy()
-                )
-            s = self._states(r, obs)
-            return r.parts["net"](torch.cat([s[:-1], s[1:]], dim=-1)).squeeze(-1).numpy()
+        if r.meta["form"] == "state":
+            rows = [m.r_psi(self._states(r, obs[:-1], "reward_inputs", m.norm))[:, 0] for m in self._members]
+            return np.stack(rows).mean(0, dtype=np.float32)
+        s = self._states(r, obs)
+        return r.parts["net"](np.concatenate([s[:-1], s[1:]], axis=-1))[:, 0]
 
     def potential(self, obs: np.ndarray) -> np.ndarray:
         """AIRL's shaping potential h(s) of a batch of raw observations."""
         r = self._reward_pair()
         if r.meta["form"] != "state":
             raise ValueError(f"{r.path}: only shaped AIRL has a shaping potential h")
-        with torch.no_grad():
-            return (
-                torch.stack([m.h(self._states(r, obs, norm=m.norm)).squeeze(-1) for m in self._members]).mean(0).numpy()
-            )
+        return np.stack([m.h(self._states(r, obs, norm=m.norm))[:, 0] for m in self._members]).mean(0, dtype=np.float32)
 
     def absorbing_reward(self) -> float:
         """The learned reward of the absorbing state (a learned constant), in the same form as reward()."""

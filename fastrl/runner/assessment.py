@@ -11,15 +11,15 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..assess.figures import deviations, draw_path_figures, group_of, plot_distributions
+from ..assess.figures import deviations, draw_path_figures, plot_distributions
 from ..assess.journal import Journal, identity
 from ..assess.references import expert_paths, references_for
 from ..assess.report import SCORING_ERRORS, build_report, csv_text, group_key, problem_text, row, trajectory_files
-from ..assess.scoring import Scorer, TrajectoryScores, normalise, with_learned
+from ..assess.scoring import Scorer, TrajectoryScores, normalise
 from ..irl.network_files import has_networks
 from ..spec import load_spec
 from .archive import SAMPLE, Job, gathered, plan_job, sample_note
-from .helper import Helper, journaling, score_shared
+from .helper import Helper, journaling, record_assessment, score_shared
 
 
 @dataclass
@@ -93,53 +93,31 @@ def score_here(scorer: Scorer, job: Job, episodes: int, cache: Path | None, on_f
 
 
 def score_with_helper(
-    helper: Helper,
-    scorer: Scorer,
-    job: Job,
-    networks: Path | None,
-    episodes: int,
-    cache: Path | None,
-    on_file,
-    pictures: bool,
+    helper: Helper, scorer: Scorer, job: Job, episodes: int, cache: Path | None, on_file, pictures: bool
 ) -> Scored:
-    """Score in two processes taking files from one counter; each journals what it scores. The worker loads the
-    networks and the references first, then scores with them. Where this process has no networks (few files: it
-    never imports torch) it replays meanwhile and has the worker evaluate its share's learned scores at the end,
-    each trajectory on its own as in score_here; with many files it loads the networks after the fork and scores
-    whole, so that nothing piles up.
+    """Score in two processes taking files from one counter; each journals what it scores. The worker (forked with
+    the scorer and its networks) first loads or computes the references, then scores.
 
-    With `pictures`, each process first imports what it will draw with (matplotlib there, Rerun here): the counter
-    shares out the files, so time spent importing now is made up by the other process scoring more."""
-    prepared = helper.prepare(networks, episodes, cache, pictures)
+    With `pictures`, each process first imports what it will draw with (matplotlib and Rerun there, matplotlib here):
+    the counter shares out the files, so time spent importing now is made up by the other process scoring more."""
+    prepared = helper.prepare(episodes, cache, pictures)
     todo = [job.files[i] for i in job.todo]
     keep = {k for k, i in enumerate(job.todo) if i in job.keep}
     theirs = helper.score_share(todo, Journal(path=job.journal.path, identity=job.journal.identity), keep)
-    whole = networks is None or job.streaming
-    if whole and networks is not None:
-        from ..irl.networks import load_networks
+    if pictures:  # this process draws the distributions
+        from ..assess.figures import _pyplot
 
-        scorer.attach(load_networks(networks))
-    if pictures:
-        from ..log import assessment  # noqa: F401 (Rerun and the colour map)
+        _pyplot()
 
     def after_file() -> bool:
-        """Show progress; stop early if the worker could not load the networks."""
+        """Show progress; stop early if the worker could not prepare the references."""
         on_file()
         return prepared.done() and prepared.exception() is not None
 
-    if whole:
-        mine = score_shared(todo, helper.counter, scorer.score_file, after_file, journaling(job.journal, todo, keep))
-    else:
-        mine = score_shared(todo, helper.counter, scorer.replay_file, after_file)
-    learned, references, recordings = prepared.result()  # the worker's error, if any, is raised here
-    if not whole:
-        replayed = [r for _, r, _ in mine if r is not None]
-        for (s, _), extra in zip(replayed, helper.learned([obs for _, obs in replayed]).result()):
-            with_learned(s, extra)
-        sink = journaling(job.journal, todo, keep)
-        mine = [(i, r and r[0], p) for i, r, p in mine if sink(i, r and r[0], p)]
+    mine = score_shared(todo, helper.counter, scorer.score_file, after_file, journaling(job.journal, todo, keep))
+    references, recordings = prepared.result()  # the worker's error, if any, is raised here
     kept = {job.todo[i]: s for i, s, _ in mine + theirs.result() if s is not None}
-    return Scored(kept, references, recordings, learned)
+    return Scored(kept, references, recordings, scorer.learned)
 
 
 def assess(
@@ -166,7 +144,7 @@ def assess(
     streaming = len(files) > SAMPLE
     parallel = address is None and (Helper.worth_it(len(files)) if parallel is None else parallel)
     t0 = time.perf_counter()
-    scorer, recording_id = load_scorer(run, spec_path, networks=not parallel)
+    scorer, recording_id = load_scorer(run, spec_path)
     paths, seconds = outputs_for(output, run), {"load": time.perf_counter() - t0}
     networks = run / "networks" if run is not None and has_networks(run / "networks") else None
     cache = run / "assessment" / "references.json" if run is not None else None
@@ -205,7 +183,7 @@ def assess(
                     """Files taken so far, by either process."""
                     bar.update(task, completed=min(helper.counter.value, len(job.todo)))
 
-                done = score_with_helper(helper, scorer, job, networks, reference_episodes, cache, taken, pictures)
+                done = score_with_helper(helper, scorer, job, reference_episodes, cache, taken, pictures)
             else:
                 done = score_here(scorer, job, reference_episodes, cache, lambda: bar.advance(task))
         journal.close()
@@ -239,14 +217,13 @@ def assess(
         paths["json"].parent.mkdir(parents=True, exist_ok=True)
         paths["csv"].write_text(csv_text(report))
         result.files["csv"] = paths["csv"]
-        if drawing:  # the distributions figure in the helper too while this process writes the recording
-            from ..log.assessment import log_assessment
-
+        if drawing:  # the recording in the helper, after the path figures, while this process draws the distributions
             t0 = time.perf_counter()
-            late = _run(helper, plot_distributions, report, paths["distributions"])
             rid = recording_id or f"assessment-{scorer.spec.name}"
-            rrd = log_assessment(paths["rrd"], rid, scorer.env.task, kept, report, devs, lambda s: group_of(s, by))
-            result.files |= early.result() | {"distributions": late.result(), "rrd": rrd}
+            recorded = (paths["rrd"], rid, kept, report, devs, by)
+            rrd = helper.record(*recorded) if helper else _run(None, record_assessment, scorer.env.task, *recorded)
+            distributions = plot_distributions(report, paths["distributions"])
+            result.files |= early.result() | {"distributions": distributions, "rrd": rrd.result()}
             seconds["pictures"] += time.perf_counter() - t0
     finally:
         if helper is not None:

@@ -1,6 +1,6 @@
-"""A second process for `fastrl score`, forked before torch is imported: it loads the run's networks, scores files
-taken from a counter shared with this process, evaluates the learned scores of this process's share, and draws the
-figures while this process writes the report and the recording."""
+"""A second process for `fastrl score`, forked with the scorer and its networks: it loads the references, scores files
+taken from a counter shared with this process, then draws the path figures and writes the recording while this
+process writes the report and draws the distributions."""
 
 from __future__ import annotations
 
@@ -11,12 +11,10 @@ from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
 from pathlib import Path
 
-import numpy as np
-
 from ..assess.journal import Journal, record
 from ..assess.references import compute_expert_paths, references_for
 from ..assess.report import SCORING_ERRORS, problem_text
-from ..assess.scoring import Scorer, learned_scores
+from ..assess.scoring import Scorer
 
 MIN_FILES = 16  # below this, forking costs more than it saves
 _SCORER: Scorer | None = None  # the forked worker's copy of the parent's scorer
@@ -31,15 +29,12 @@ def _adopt(scorer: Scorer, counter) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _prepare(networks: Path | None, episodes: int, cache: Path | None, pictures: bool) -> tuple:
+def _prepare(episodes: int, cache: Path | None, pictures: bool) -> tuple:
     """Worker side of `Helper.prepare`."""
-    if networks is not None:
-        from ..irl.networks import load_networks
-
-        _SCORER.attach(load_networks(networks))
-    prepared = (_SCORER.learned, *references_for(_SCORER, episodes, cache))
-    if pictures:  # import matplotlib now: the files are shared out, so the parent scores more meanwhile
+    prepared = references_for(_SCORER, episodes, cache)
+    if pictures:  # import matplotlib and Rerun now: the files are shared out, so the parent scores more meanwhile
         from ..assess.figures import _pyplot
+        from ..log import assessment  # noqa: F401
 
         _pyplot()
     return prepared
@@ -58,9 +53,17 @@ def _score_share(files: list[Path], journal: Journal | None = None, keep: set[in
             os._exit(0)
 
 
-def _learned(observations: list[np.ndarray]) -> list[dict]:
-    """Worker side of `Helper.learned`."""
-    return [learned_scores(_SCORER.networks, obs) for obs in observations] if _SCORER.learned else []
+def _record(*args) -> Path:
+    """Worker side of `Helper.record`."""
+    return record_assessment(_SCORER.env.task, *args)
+
+
+def record_assessment(task, path: Path, recording_id: str, kept: list, report: dict, devs: dict, by: str) -> Path:
+    """The assessment's Rerun recording (paths by learned value, deviations, the report's tables)."""
+    from ..assess.figures import group_of
+    from ..log.assessment import log_assessment
+
+    return log_assessment(path, recording_id, task, kept, report, devs, lambda s: group_of(s, by))
 
 
 def _expert(seeds: list[int]):
@@ -121,8 +124,8 @@ def cores() -> int:
 
 
 class Helper:
-    """One forked worker that inherits the parent's scorer (without networks: it loads them itself, so torch is
-    imported there only); only file names, observations, results and figure data cross over."""
+    """One forked worker that inherits the parent's scorer and its networks; only file names, results and figure
+    data cross over."""
 
     def __init__(self, scorer: Scorer):
         fork = multiprocessing.get_context("fork")
@@ -135,19 +138,15 @@ class Helper:
         """Whether a second process pays: enough files, and a second core."""
         return n_files >= MIN_FILES and cores() > 1 and "fork" in multiprocessing.get_all_start_methods()
 
-    def prepare(self, networks: Path | None, episodes: int, cache: Path | None, pictures: bool = False) -> Future:
-        """Load the networks in the worker (None: none), and matplotlib if `pictures`; a future of (learned,
-        references, recordings learned from) as `references_for` gives them."""
-        return self.pool.submit(_prepare, networks, episodes, cache, pictures)
+    def prepare(self, episodes: int, cache: Path | None, pictures: bool = False) -> Future:
+        """Load (or compute) the references in the worker, and matplotlib if `pictures`; a future of (references,
+        recordings learned from) as `references_for` gives them."""
+        return self.pool.submit(_prepare, episodes, cache, pictures)
 
     def score_share(self, files: list[Path], journal: Journal | None = None, keep: set[int] | None = None) -> Future:
         """Score files taken from the shared counter in the worker, with the learned scores; a future of
         score_shared's list (with `journal`, each file is journaled there and only the indices in `keep` listed)."""
         return self.pool.submit(_score_share, files, journal, keep)
-
-    def learned(self, observations: list[np.ndarray]) -> Future:
-        """A future of learned_scores for each trajectory's observations (an empty list without learned networks)."""
-        return self.pool.submit(_learned, observations)
 
     def expert_paths(self, seeds: list[int]) -> dict:
         """The scripted expert's paths on `seeds`, the first half rolled out in the worker, the rest here."""
@@ -155,6 +154,10 @@ class Helper:
         theirs = self.pool.submit(_expert, seeds[:half])
         mine = compute_expert_paths(self.scorer, seeds[half:])
         return theirs.result() | mine
+
+    def record(self, path: Path, recording_id: str, kept: list, report: dict, devs: dict, by: str) -> Future:
+        """A future of the recording written by `record_assessment` in the worker (after what it was given before)."""
+        return self.pool.submit(_record, path, recording_id, kept, report, devs, by)
 
     def submit(self, fn, *args) -> Future:
         """Run a picklable function in the worker."""

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..agents.sb3 import checkpoint_problem
+from ..agents.checkpoint_files import checkpoint_problem
 from ..spec import SpecError, load_spec
 from ..spec.models import TaskSpec
 
