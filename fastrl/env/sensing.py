@@ -7,7 +7,6 @@ from functools import lru_cache
 
 import mujoco
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..model.compiler import CompiledTask
 from ..spec.geometry import sample_polyline
@@ -146,6 +145,8 @@ class DistanceGrid:
     """Distance to a polyline on the plate, precomputed on a grid and interpolated bilinearly."""
 
     def __init__(self, points: np.ndarray, cell: float = LINE_RESOLUTION, extent: float = 0.2, cap: float = 0.1):
+        from scipy.spatial import cKDTree  # here: scipy.spatial costs 0.5 s of every process start that has no line
+
         dense = sample_polyline(points, 0.25 * cell)
         self.x0, self.cell, self.cap = -extent, cell, cap
         self.n = int(round(2 * extent / cell)) + 1
