@@ -5,7 +5,7 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("CI", "1")
-# Ray (tests/test_sweep.py) on loopback only: otherwise it resolves 127.0.0.1 to the machine's network address.
+# Ray (tests/runner/test_sweep.py) on loopback only: otherwise it resolves 127.0.0.1 to the machine's network address.
 os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
 os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
 

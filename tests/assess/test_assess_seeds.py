@@ -1,0 +1,108 @@
+"""`fastrl assess --seeds N`: learned scores as mean and spread over seeds, their agreement, and the warnings."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from fastrl.assess.agreement import SEEDS_AGREE, combine
+from fastrl.cli import app
+from fastrl.data import Trajectory
+from fastrl.data.cohort import make_cohort
+from fastrl.spec import load_spec
+
+from ..runner.test_runner import rrd_verify
+
+pytestmark = pytest.mark.slow  # trains or drives a viewer end to end
+
+NO_EXPERT = Path(__file__).parents[1] / "fixtures" / "no_expert.yaml"
+LEVELS = np.repeat([1, 2, 3, 4, 5], 4)
+
+
+def report(reward: np.ndarray, value: np.ndarray, time: np.ndarray) -> dict:
+    """A per-seed report of 20 labelled files, as `fastrl score` writes it (normalised and raw learned scores)."""
+    rows = [
+        {
+            "file": f"f{i:02d}",
+            "subject": f"f{i:02d}",
+            "skill": int(LEVELS[i]),
+            "reward": float(r) / 10,
+            "reward_raw": float(r),
+            "value": float(v),
+            "value_raw": float(v),
+            "time": float(t),
+            "path_length": 0.1 + float(t) / 100,
+            "subtasks": 1.0,
+        }
+        for i, (r, v, t) in enumerate(zip(reward, value, time))
+    ]
+    keys = ["reward", "value", "time", "path_length", "subtasks"]
+    return {"trajectories": rows, "scores": keys, "warnings": [], "grouped_by": "skill", "ranking": {}}
+
+
+def test_agreeing_seeds_give_mean_spread_and_no_warning():
+    rng = np.random.default_rng(0)
+    skill = LEVELS + rng.normal(0, 0.3, 20)
+    time = 30 - 5 * skill
+    seeds = [report(3 * skill + rng.normal(0, 0.2, 20), skill + 10 * k, time) for k in range(3)]
+    out = combine(seeds, [0, 1, 2])
+    assert out["seeds"]["agreement"]["reward"]["mean_tau"] > 0.9
+    assert out["seeds"]["with_simple_metrics"]["value"]["time"] > 0.9  # faster is better: it agrees with the clock
+    assert not [w for w in out["warnings"] if "seeds disagree" in w or "against every" in w]
+    row = out["trajectories"][0]
+    values = [s["trajectories"][0]["value"] for s in seeds]
+    assert row["value"] == pytest.approx(np.mean(values)) and row["value_sd"] == pytest.approx(np.std(values))
+    assert out["ranking"]["reward"]["kendall_tau_b"] > 0.8
+
+
+def test_seeds_that_disagree_by_construction_are_warned_of():
+    rng = np.random.default_rng(1)
+    time = 30 - 5 * LEVELS + rng.normal(0, 0.5, 20)
+    orders = [rng.permutation(20).astype(float) for _ in range(3)]  # three unrelated rankings
+    out = combine([report(o, LEVELS.astype(float), time) for o in orders], [0, 1, 2])
+    assert out["seeds"]["agreement"]["reward"]["mean_tau"] < SEEDS_AGREE
+    assert any(w.startswith("reward: the 3 seeds disagree") for w in out["warnings"])
+    assert not any(w.startswith("value: the 3 seeds disagree") for w in out["warnings"])
+
+
+def test_a_learned_score_against_every_simple_metric_is_warned_of():
+    time = 30 - 5 * LEVELS + np.linspace(0, 0.5, 20)
+    backwards = -LEVELS.astype(float) + np.linspace(0, 0.1, 20)  # the slowest scored best
+    out = combine([report(backwards, backwards, time), report(backwards, backwards, time)], [3, 4])
+    assert out["seeds"]["with_simple_metrics"]["reward"]["time"] < 0
+    assert any(w.startswith("reward: ranks against every simple metric") for w in out["warnings"])
+
+
+@pytest.fixture(scope="module")
+def cohort(tmp_path_factory):
+    """A small cohort of the test task without actions."""
+    folder = tmp_path_factory.mktemp("cohort")
+    for traj in make_cohort(load_spec(NO_EXPERT), 3, 2, seed=0):
+        Trajectory(traj.time, traj.portal, traj.meta).save(folder / f"{traj.meta['subject']}.npz")
+    return folder
+
+
+def test_assess_with_two_seeds_learns_two_scorers_and_reports_their_agreement(tmp_path, cohort):
+    out = tmp_path / "report" / "scores.json"
+    res = CliRunner().invoke(
+        app,
+        ["assess", str(cohort), "--spec", str(NO_EXPERT), "--top", "2", "--seeds", "2", "-o", str(out)]
+        + ["--runs", str(tmp_path), "--no-progress"],
+    )
+    assert res.exit_code == 0, res.output
+    assert "learned scores over seeds 0, 1: Kendall tau" in res.output
+    run = next(tmp_path.glob("medial_pair/*-assess-airl-s0"))
+    assert (run / "learned-s0" / "networks").is_dir() and (run / "learned-s1" / "networks").is_dir()
+    assert [load_spec(run / f"learned-s{s}" / "spec.yaml").train.seed for s in (0, 1)] == [0, 1]
+    report = json.loads(out.read_text())
+    assert report["seeds"]["seeds"] == [0, 1] and set(report["seeds"]["agreement"]) == {"reward", "value"}
+    assert all(r["reward_sd"] is not None and r["value_sd"] >= 0 for r in report["trajectories"])
+    for seed in (0, 1):  # each seed's own report is kept
+        assert len(json.loads((out.parent / "seeds" / f"s{seed}" / "scores.json").read_text())["trajectories"]) == 6
+    assert {"time", "path_length", "reward", "value"} <= set(report["ranking"])
+    rrd_verify(out.with_suffix(".rrd"))
+    assert out.with_name("scores_distributions.png").stat().st_size > 0
+    bad = CliRunner().invoke(app, ["assess", str(cohort), "--spec", str(NO_EXPERT), "--seeds", "0"])
+    assert bad.exit_code == 2 and "--seeds must be at least 1" in bad.output

@@ -1,0 +1,55 @@
+"""The training monitor: evaluations during training, early stop, extra statistics, checkpoint parts."""
+
+import json
+
+import torch
+
+from fastrl.agents.sb3 import build_model, make_vec_env
+from fastrl.runner.monitor import TrainingMonitor
+from fastrl.spec import load_spec
+
+from ..conftest import spec_file
+
+TINY = ["train.n_envs=2", "train.ppo.n_steps=32", "train.ppo.batch_size=64", "train.ppo.n_epochs=1"]
+
+
+class Counter(torch.nn.Module):
+    """A stand-in trainable part with a state dict."""
+
+    def __init__(self):
+        super().__init__()
+        self.w = torch.nn.Parameter(torch.tensor([3.0]))
+
+
+def test_evaluations_during_training_are_logged_and_can_stop_it(tmp_path):
+    spec = load_spec(spec_file("tracelines"), TINY)
+    venv = make_vec_env(spec, 2, 0)
+    model = build_model(spec, venv)
+    scores = iter([0.2, 0.5, 0.95, 1.0])
+    calls = []
+
+    def evaluator():
+        calls.append(model.num_timesteps)
+        return {"eval/subtasks": next(scores)}
+
+    part = Counter()
+    monitor = TrainingMonitor(
+        tmp_path,
+        list(spec.reward.features),
+        total=4096,
+        log_every=10_000,
+        checkpoint_every=192,
+        progress=False,
+        stats=lambda: {"irl/disc_accuracy": 0.75},
+        parts={"disc": part},
+        evaluator=evaluator,
+        eval_every=128,
+        stop_at=0.9,
+    )
+    model.learn(4096, callback=monitor)
+    assert monitor.stopped_early and len(calls) == 3 and model.num_timesteps < 4096
+    rows = [json.loads(line) for line in (tmp_path / "metrics.jsonl").read_text().splitlines()]
+    assert [r["eval/subtasks"] for r in rows] == [0.2, 0.5, 0.95]  # an evaluation makes a point of its own
+    assert all(r["irl/disc_accuracy"] == 0.75 for r in rows)
+    saved = sorted((tmp_path / "checkpoints").glob("*/parts.pt"))
+    assert saved and torch.load(saved[0], weights_only=True)["disc"]["w"].item() == 3.0
