@@ -10,7 +10,7 @@ import numpy as np
 from rich.console import Console
 
 from ..agents.expert import ScriptedExpert
-from ..agents.sb3 import batch_policy, load_checkpoint, policy_function, save_checkpoint
+from ..agents.sb3 import load_checkpoint, policy_function, save_checkpoint
 from ..atomic import DiskFull, is_disk_full, write_json, write_text
 from ..env.fast_env import FastEnv
 from ..irl.export import save_networks
@@ -20,9 +20,9 @@ from ..model.compiler import CompiledTask, compile_task
 from ..spec import load_spec
 from ..spec.models import TaskSpec
 from .beside import Beside
-from .evaluate import evaluate, evaluate_batched
+from .evaluate import evaluate
 from .learner import build_learner
-from .monitor import TrainingMonitor
+from .monitoring import training_monitor
 from .rundir import clean_leftovers, latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
 from .runfiles import read_metrics, read_run_spec, read_state, require
 from .saved import load_policy
@@ -197,23 +197,7 @@ def _stages(
 ) -> None:
     """Train to the budget (checkpointing; Ctrl-C or SIGTERM saves one and stops), save, evaluate, write eval.json."""
     model, venv = learner.model, learner.venv
-    ev = spec.evaluate
-    monitor = TrainingMonitor(
-        run,
-        list(spec.reward.features),
-        total=spec.train.timesteps,
-        log_every=spec.train.log_every,
-        checkpoint_every=spec.train.checkpoint_every,
-        recorder=recorder,
-        progress=progress,
-        keep_checkpoints=spec.train.keep_checkpoints,
-        stats=learner.stats,
-        parts=learner.parts,
-        evaluator=periodic_evaluator(spec, model, venv),
-        eval_every=periodic_every(spec),
-        stop_at=ev.stop_at_subtasks,
-    )
-    monitor.episodes = before.get("episodes", 0)
+    monitor = training_monitor(run, spec, learner, recorder, progress, before.get("episodes", 0))
     seconds = before.get("train_seconds", 0.0)
     remaining = spec.train.timesteps - model.num_timesteps
     t0 = time.perf_counter()
@@ -221,11 +205,11 @@ def _stages(
         if remaining > 0:
             learner.learn(remaining, monitor)
     except DiskFull:
-        monitor.progress.stop()
+        monitor.stop_progress()
         raise
     except KeyboardInterrupt as stop:
         with shielded():
-            monitor.progress.stop()
+            monitor.stop_progress()
             seconds += time.perf_counter() - t0
             save_checkpoint(
                 run / "checkpoints" / f"{model.num_timesteps:010d}",
@@ -261,32 +245,6 @@ def _stages(
     recorder.log_summary(results["agent"])
     recorder.flush()
     update_meta(run, status="done", eval_seconds=results["eval_seconds"])
-
-
-def periodic_every(spec: TaskSpec) -> int:
-    """Timesteps between evaluations during training (0: none): the algorithm's own cadence, or the spec's."""
-    return getattr(spec.train.params(), "periodic_every", None) or spec.evaluate.periodic_every
-
-
-def periodic_evaluator(spec: TaskSpec, model, venv):
-    """Deterministic evaluation of the current policy on the first evaluation seeds, as curve points.
-
-    The episodes run side by side, one policy call for all of them per step."""
-    if not periodic_every(spec):
-        return None
-    seeds = [spec.evaluate.seed + i for i in range(spec.evaluate.periodic_episodes)]
-    envs = [FastEnv(spec) for _ in seeds]
-
-    def run_evaluation() -> dict[str, float]:
-        summary = evaluate_batched(envs, batch_policy(model, venv), seeds)
-        return {
-            "eval/success_rate": summary["success_rate"],
-            "eval/subtasks": summary["subtasks_completed"],
-            "eval/return": summary["return_mean"],
-            "eval/episode_time": summary["episode_time_mean"],
-        }
-
-    return run_evaluation
 
 
 def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: Console | None) -> dict:
