@@ -47,10 +47,14 @@ def start_run(
     console: Console | None = None,
     progress: bool = True,
     into: Path | None = None,
+    task: CompiledTask | None = None,
 ) -> Path:
-    """Train, evaluate and record a new run of a spec file (in `into` if given); return its directory."""
-    spec = load_spec(spec_path, overrides)
-    task = compile_task(spec)
+    """Train, evaluate and record a new run of a spec file (in `into` if given); return its directory.
+
+    `task`: the spec file with these overrides, compiled already (so it is not compiled again)."""
+    if task is None:
+        task = compile_task(load_spec(spec_path, overrides))
+    spec = task.spec
     if into is not None:
         Path(into).mkdir(parents=True, exist_ok=False)
     run = Path(into) if into is not None else new_run_dir(Path(root), spec)
