@@ -50,10 +50,11 @@ ALGO_SETS = {"PPO": [], "SAC": ["train.algo=SAC", "actions.mode=rates"]}  # fast
 
 def fastrl_side(task: str, seed: int, out: Path, sets: list[str]) -> None:
     """One `fastrl run` in this process; its periodic evaluations (timesteps, subtasks, time) into out."""
+    from fastrl.runner import monitoring
     from fastrl.runner import run as run_stage
 
     events = []
-    wrapped = run_stage.periodic_evaluator
+    wrapped = monitoring.periodic_evaluator
 
     def timed_evaluator(spec, model, venv):
         inner = wrapped(spec, model, venv)
@@ -66,7 +67,7 @@ def fastrl_side(task: str, seed: int, out: Path, sets: list[str]) -> None:
 
         return None if inner is None else evaluation
 
-    run_stage.periodic_evaluator = timed_evaluator
+    monitoring.periodic_evaluator = timed_evaluator
     with tempfile.TemporaryDirectory() as root:
         run = run_stage.start_run(ROOT / "specs" / f"{task}.yaml", [f"train.seed={seed}", *sets], root, progress=False)
         meta = json.loads((run / "meta.json").read_text())

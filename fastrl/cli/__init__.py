@@ -7,28 +7,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
-import typer.core
 from rich.console import Console
 from rich.markup import escape
 
 from ..about import version_line
-from ..spec import SpecError, SpecIssue, json_schema, load_spec
+from ..spec import SpecError, json_schema, load_spec
+from . import typer_flags  # noqa: F401  (before any command: the --help of every one)
 
 if TYPE_CHECKING:
     from ..model import CompiledTask
-
-_value_type = getattr(typer.core.TyperOption, "display_type_rich", None)
-
-
-def _flag_has_no_value(self, ctx):
-    """Type column of --help: none for flags (--json, --progress/--no-progress, --help take no value)."""
-    return None if self.is_flag else _value_type(self, ctx)
-
-
-# typer 0.29 prints `<bool>` beside every flag, as if it took a value; this covers the commands
-# of every module and typer's own --help.
-if _value_type is not None:  # a typer without it prints no type column to fix
-    typer.core.TyperOption.display_type_rich = _flag_has_no_value
 
 app = typer.Typer(
     name="fastrl",
@@ -61,14 +48,9 @@ SetOpt = Annotated[
 
 def load(path: Path, overrides: list[str] | None = None) -> CompiledTask:
     """Validate and compile a spec; every problem (MuJoCo compile errors too) raises SpecError."""
-    from ..model import compile_task  # imports mujoco: only for commands that need it
+    from ..model import load_task  # imports mujoco: only for commands that need it
 
-    spec = load_spec(path, overrides or ())
-    try:
-        return compile_task(spec)
-    except ValueError as e:  # mujoco reports compile errors as ValueError
-        detail = " ".join(str(e).split())
-        raise SpecError([SpecIssue(str(path), None, "", f"MuJoCo cannot compile the model: {detail}")]) from None
+    return load_task(path, overrides)
 
 
 def report(error: SpecError) -> None:
@@ -93,6 +75,21 @@ def load_or_exit(path: Path, overrides: list[str] | None = None) -> CompiledTask
     except SpecError as e:
         report(e)
         raise typer.Exit(code=2) from None
+
+
+def spec_or_exit(path: Path, overrides: list[str]):
+    """The validated spec (not compiled), or every problem printed to stderr and exit 2."""
+    try:
+        return load_spec(path, overrides)
+    except SpecError as e:
+        report(e)
+        raise typer.Exit(code=2) from None
+
+
+def with_shortcuts(overrides: list[str] | None, shortcuts: dict) -> list[str]:
+    """--set's overrides, then one for each shortcut option given (e.g. --seed 3: train.seed=3)."""
+    given = {k: v for k, v in shortcuts.items() if v is not None and v != ""}
+    return [*(overrides or []), *(f"{k}={v}" for k, v in given.items())]
 
 
 def write_text(path: Path, text: str) -> None:
@@ -218,13 +215,12 @@ def run(
 
     With an `irl` section (algorithm gail, airl or bc) the agent learns from demonstrations instead.
     """
-    overrides = list(set_ or [])
-    overrides += [f"train.algo={algo}"] if algo else []
-    overrides += [f"train.seed={seed}"] if seed is not None else []
-    overrides += [f"train.timesteps={timesteps}"] if timesteps is not None else []
+    overrides = with_shortcuts(set_, {"train.algo": algo, "train.seed": seed, "train.timesteps": timesteps})
     if (spec is None) == (resume is None):
         err.print("give a SPEC to start a run, or --resume RUN_DIR to continue one (not both)", markup=False)
         raise typer.Exit(code=2)
+    from .training import train_and_report
+
     train_and_report(spec, overrides, resume, runs, progress, timesteps)
 
 
@@ -245,75 +241,13 @@ def irl(
 ) -> None:
     """Learn a reward and a policy from demonstrations (GAIL, AIRL) or clone them (BC), then evaluate."""
     overrides = list(set_ or [])
-    if algorithm is None and load_or_exit(spec, overrides).spec.irl.algorithm == "none":
+    if algorithm is None and spec_or_exit(spec, overrides).irl.algorithm == "none":
         algorithm = "airl"
-    overrides += [f"irl.algorithm={algorithm}"] if algorithm else []
-    overrides += [f"irl.demonstrations.path={demos}"] if demos is not None else []
-    overrides += [f"train.algo={generator}"] if generator else []
-    overrides += [f"train.seed={seed}"] if seed is not None else []
-    overrides += [f"train.timesteps={timesteps}"] if timesteps is not None else []
+    shortcuts = {"irl.algorithm": algorithm, "irl.demonstrations.path": demos, "train.algo": generator}
+    overrides = with_shortcuts(overrides, shortcuts | {"train.seed": seed, "train.timesteps": timesteps})
+    from .training import train_and_report
+
     train_and_report(spec, overrides, None, runs, progress, timesteps)
-
-
-def train_and_report(
-    spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool, timesteps: int | None
-) -> None:
-    """Start (or resume) a run, turn interruptions and bad input into messages, print the evaluation."""
-    from ..agents.sb3 import CheckpointDamaged, CheckpointMismatch
-    from ..atomic import DiskFull
-    from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace, resume_run, start_run
-    from ..runner.runfiles import RunFileError, read_eval
-    from ..runner.stops import stop_on_sigterm
-    from .stops import report_stop
-
-    with stop_on_sigterm(until_exit=True):  # a second Ctrl-C while the run saves is ignored until exit
-        try:
-            if resume is not None:
-                from .experiment import experiment_and_report, is_experiment
-
-                if is_experiment(resume):
-                    return experiment_and_report(None, [], resume, runs, progress)
-                run_dir = resume_run(resume, out, progress, timesteps)
-            else:
-                if load_or_exit(spec, overrides).spec.experiment.enabled:
-                    from .experiment import experiment_and_report
-
-                    return experiment_and_report(spec, overrides, None, runs, progress)
-                run_dir = start_run(spec, overrides, runs, out, progress)
-        except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
-            report_stop(stop)
-        except (SpecError, FileNotFoundError, CheckpointMismatch, CheckpointDamaged, RunFileError) as e:
-            exit_with(e)
-    results = read_eval(run_dir)
-    print_eval(results)
-    from ..runner.advice import learning_advice
-
-    advice = learning_advice(run_dir, spec)
-    if advice:
-        err.print(f"warning: {advice}", markup=False, style="yellow")
-    out.print(f"run saved in {escape(str(run_dir))}; view it with: fastrl view {escape(str(run_dir))}")
-
-
-def print_eval(results: dict) -> None:
-    """A table of evaluation figures, agent next to expert."""
-    from rich.table import Table
-
-    table = Table(title=f"evaluation over {len(results['seeds'])} episodes")
-    table.add_column("policy")
-    for col in ("success", "subtasks", "return", "time (s)", "path (m)"):
-        table.add_column(col, justify="right")
-    for who in ("agent", "expert"):
-        r = results.get(who)
-        if r:
-            table.add_row(
-                who,
-                f"{r['success_rate']:.0%}",
-                f"{r['subtasks_completed']:.1%}",
-                f"{r['return_mean']:.1f}",
-                f"{r['episode_time_mean']:.1f}",
-                f"{r['path_length_mean']:.3f}",
-            )
-    out.print(table)
 
 
 @app.command(name="eval")
@@ -324,28 +258,9 @@ def eval_(
     output: Annotated[Path | None, typer.Option("-o", "--output", help="write the figures as JSON")] = None,
 ) -> None:
     """Re-evaluate a saved run (deterministic episodes), or the scripted expert on a spec."""
-    from ..runner import EvaluationInterrupted, evaluate_expert, evaluate_saved
-    from ..runner.stops import stop_on_sigterm
-    from .runcheck import check_run
-    from .stops import stop_code
+    from .training import eval_and_report
 
-    if (run_dir is None) == (expert is None):
-        err.print("give RUN_DIR, or --expert SPEC", markup=False)
-        raise typer.Exit(code=2)
-    if run_dir is not None:
-        check_run(run_dir, {"spec.yaml"})
-    with stop_on_sigterm(until_exit=True):
-        try:
-            results = evaluate_saved(run_dir, episodes) if run_dir else evaluate_expert(expert, (), episodes)
-        except EvaluationInterrupted as stop:
-            err.print(f"{stop.signal_name}: evaluation stopped; nothing was written", markup=False)
-            err.print(f"evaluate again with: fastrl eval {stop.run}", markup=False)
-            raise typer.Exit(code=stop_code(stop.signal_name)) from None
-        except (SpecError, FileNotFoundError) as e:
-            exit_with(e)
-    print_eval(results)
-    if output is not None:
-        write_text(output, json.dumps(results, indent=2))
+    eval_and_report(run_dir, expert, episodes, output)
 
 
 @app.command()
@@ -355,10 +270,6 @@ def view(
     port: Annotated[int, typer.Option(help="with --web: the web viewer's port")] = 9090,
 ) -> None:
     """Open a run's recording in the Rerun viewer (or say how, where there is no display)."""
-    import os
-    import shutil
-    import subprocess
-
     from ..runner.runfiles import recording_fault
     from .runcheck import check_run
 
@@ -371,19 +282,9 @@ def view(
         from .web import view_web
 
         return view_web(run_dir, port)
-    rrd = run_dir / "recording.rrd" if run_dir.is_dir() else run_dir
-    if not rrd.exists():
-        err.print(f"no recording at {rrd}", markup=False)
-        raise typer.Exit(code=2)
-    viewer = shutil.which("rerun")
-    if viewer and (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        subprocess.Popen([viewer, str(rrd)])
-        out.print(f"opening {escape(str(rrd))} in the Rerun viewer")
-        return
-    out.print(
-        f"no display here: copy {escape(str(rrd))} to a machine with a display and run `rerun {rrd.name}`, "
-        f"or serve it to a browser with `fastrl view --web {escape(str(run_dir))}`"
-    )
+    from .web import view_local
+
+    view_local(run_dir)
 
 
 # commands in their own modules register themselves on `app`

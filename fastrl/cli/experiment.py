@@ -12,26 +12,13 @@ from ..spec import SpecError
 from . import err, exit_with, out
 
 
-def is_experiment(run: Path) -> bool:
-    """Whether a run directory holds an experiment (its experiment.json, or meta.json kind)."""
-    from ..runner.runfiles import read_meta
-
-    return (run / "experiment.json").exists() or (
-        (run / "meta.json").exists() and read_meta(run).get("kind") == "experiment"
-    )
-
-
-def experiment_and_report(
-    spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool
-) -> None:
-    """Run (or continue) the spec's experiment and print its Table 3."""
+def experiment_and_report(plan, runs: Path, progress: bool) -> None:
+    """Run (or continue) the planned experiment and print its Table 3."""
     from ..runner import RunInterrupted, RunOutOfSpace
-    from ..runner.experiment import run_experiment, start_experiment
+    from ..runner.training import train
 
     try:
-        run_dir = (
-            run_experiment(resume, out, progress) if resume else start_experiment(spec, overrides, runs, out, progress)
-        )
+        run_dir = train(plan, runs, out, progress)
     except RunInterrupted as stop:
         run_dir = stop.run.parent
         err.print(

@@ -1,8 +1,11 @@
-"""`fastrl view --web`: a run's or a sweep's recordings in Rerun's web viewer, served on localhost."""
+"""`fastrl view`: a recording in the local Rerun viewer, or a run's or a sweep's served to a web browser."""
 
 from __future__ import annotations
 
+import os
+import shutil
 import signal
+import subprocess
 from pathlib import Path
 
 import typer
@@ -40,3 +43,20 @@ def view_web(path: Path, port: int) -> None:
         pass
     finally:
         stop(proc)
+
+
+def view_local(run_dir: Path) -> None:
+    """Open the recording in the local Rerun viewer, or say how to view it where there is no display."""
+    rrd = run_dir / "recording.rrd" if run_dir.is_dir() else run_dir
+    if not rrd.exists():
+        err.print(f"no recording at {rrd}", markup=False)
+        raise typer.Exit(code=2)
+    viewer = shutil.which("rerun")
+    if viewer and (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        subprocess.Popen([viewer, str(rrd)])
+        out.print(f"opening {escape(str(rrd))} in the Rerun viewer")
+        return
+    out.print(
+        f"no display here: copy {escape(str(rrd))} to a machine with a display and run `rerun {rrd.name}`, "
+        f"or serve it to a browser with `fastrl view --web {escape(str(run_dir))}`"
+    )

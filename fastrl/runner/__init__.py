@@ -6,8 +6,8 @@ _FROM = {
     "EvaluationInterrupted": ".stops",
     "RunInterrupted": ".stops",
     "RunOutOfSpace": ".stops",
-    "evaluate_expert": ".run",
-    "evaluate_saved": ".run",
+    "evaluate_expert": ".evaluation",
+    "evaluate_saved": ".evaluation",
     "resume_run": ".run",
     "start_run": ".run",
 }

@@ -18,7 +18,7 @@ from ..data.cohort import make_cohort
 from ..data.trajectory import Trajectory, load_files
 from ..irl.networks import has_networks, load_networks
 from ..log.experiment import log_experiment, plot_correlations
-from ..model.compiler import compile_task
+from ..model.compiler import CompiledTask, compile_task
 from ..model.scope import joint_ranges
 from ..spec import load_spec
 from ..spec.models import TaskSpec
@@ -30,11 +30,17 @@ LEARNED = ("reward", "value")
 
 
 def start_experiment(
-    spec_path, overrides=(), root="runs", console: Console | None = None, progress: bool = True
+    spec_path,
+    overrides=(),
+    root="runs",
+    console: Console | None = None,
+    progress: bool = True,
+    task: CompiledTask | None = None,
 ) -> Path:
-    """Run the spec's experiment in a new run directory; return it."""
-    spec = load_spec(spec_path, overrides)
-    task = compile_task(spec)
+    """Run the spec's experiment in a new run directory; return it (`task`: the spec compiled already)."""
+    if task is None:
+        task = compile_task(load_spec(spec_path, overrides))
+    spec = task.spec
     run = new_run_dir(Path(root), spec, label=f"experiment-s{spec.experiment.seed}")
     write_spec(run, spec, task.xml)
     write_meta(run, spec, str(spec_path), {"status": "cohort", "overrides": list(overrides), "kind": "experiment"})

@@ -9,23 +9,19 @@ from pathlib import Path
 import numpy as np
 from rich.console import Console
 
-from ..agents.expert import ScriptedExpert
-from ..agents.sb3 import batch_policy, load_checkpoint, policy_function, save_checkpoint
+from ..agents.sb3 import load_checkpoint, policy_function, save_checkpoint
 from ..atomic import DiskFull, is_disk_full, write_json, write_text
-from ..env.fast_env import FastEnv
 from ..irl.export import save_networks
 from ..log import RunRecorder
 from ..log.recording import recording_problem, repair_recording
 from ..model.compiler import CompiledTask, compile_task
 from ..spec import load_spec
 from ..spec.models import TaskSpec
-from .beside import Beside
-from .evaluate import evaluate, evaluate_batched
+from .evaluation import evaluate_run
 from .learner import build_learner
-from .monitor import TrainingMonitor
+from .monitoring import training_monitor
 from .rundir import clean_leftovers, latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
 from .runfiles import read_metrics, read_run_spec, read_state, require
-from .saved import load_policy
 from .stops import (
     EvaluationInterrupted,
     RunInterrupted,
@@ -47,10 +43,14 @@ def start_run(
     console: Console | None = None,
     progress: bool = True,
     into: Path | None = None,
+    task: CompiledTask | None = None,
 ) -> Path:
-    """Train, evaluate and record a new run of a spec file (in `into` if given); return its directory."""
-    spec = load_spec(spec_path, overrides)
-    task = compile_task(spec)
+    """Train, evaluate and record a new run of a spec file (in `into` if given); return its directory.
+
+    `task`: the spec file with these overrides, compiled already (so it is not compiled again)."""
+    if task is None:
+        task = compile_task(load_spec(spec_path, overrides))
+    spec = task.spec
     if into is not None:
         Path(into).mkdir(parents=True, exist_ok=False)
     run = Path(into) if into is not None else new_run_dir(Path(root), spec)
@@ -197,23 +197,7 @@ def _stages(
 ) -> None:
     """Train to the budget (checkpointing; Ctrl-C or SIGTERM saves one and stops), save, evaluate, write eval.json."""
     model, venv = learner.model, learner.venv
-    ev = spec.evaluate
-    monitor = TrainingMonitor(
-        run,
-        list(spec.reward.features),
-        total=spec.train.timesteps,
-        log_every=spec.train.log_every,
-        checkpoint_every=spec.train.checkpoint_every,
-        recorder=recorder,
-        progress=progress,
-        keep_checkpoints=spec.train.keep_checkpoints,
-        stats=learner.stats,
-        parts=learner.parts,
-        evaluator=periodic_evaluator(spec, model, venv),
-        eval_every=periodic_every(spec),
-        stop_at=ev.stop_at_subtasks,
-    )
-    monitor.episodes = before.get("episodes", 0)
+    monitor = training_monitor(run, spec, learner, recorder, progress, before.get("episodes", 0))
     seconds = before.get("train_seconds", 0.0)
     remaining = spec.train.timesteps - model.num_timesteps
     t0 = time.perf_counter()
@@ -221,11 +205,11 @@ def _stages(
         if remaining > 0:
             learner.learn(remaining, monitor)
     except DiskFull:
-        monitor.progress.stop()
+        monitor.stop_progress()
         raise
     except KeyboardInterrupt as stop:
         with shielded():
-            monitor.progress.stop()
+            monitor.stop_progress()
             seconds += time.perf_counter() - t0
             save_checkpoint(
                 run / "checkpoints" / f"{model.num_timesteps:010d}",
@@ -261,97 +245,3 @@ def _stages(
     recorder.log_summary(results["agent"])
     recorder.flush()
     update_meta(run, status="done", eval_seconds=results["eval_seconds"])
-
-
-def periodic_every(spec: TaskSpec) -> int:
-    """Timesteps between evaluations during training (0: none): the algorithm's own cadence, or the spec's."""
-    return getattr(spec.train.params(), "periodic_every", None) or spec.evaluate.periodic_every
-
-
-def periodic_evaluator(spec: TaskSpec, model, venv):
-    """Deterministic evaluation of the current policy on the first evaluation seeds, as curve points.
-
-    The episodes run side by side, one policy call for all of them per step."""
-    if not periodic_every(spec):
-        return None
-    seeds = [spec.evaluate.seed + i for i in range(spec.evaluate.periodic_episodes)]
-    envs = [FastEnv(spec) for _ in seeds]
-
-    def run_evaluation() -> dict[str, float]:
-        summary = evaluate_batched(envs, batch_policy(model, venv), seeds)
-        return {
-            "eval/success_rate": summary["success_rate"],
-            "eval/subtasks": summary["subtasks_completed"],
-            "eval/return": summary["return_mean"],
-            "eval/episode_time": summary["episode_time_mean"],
-        }
-
-    return run_evaluation
-
-
-def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: Console | None) -> dict:
-    """Evaluate a policy (and the scripted expert, if the spec asks) on the spec's evaluation seeds."""
-    ev = spec.evaluate
-    seeds = [ev.seed + i for i in range(ev.episodes)]
-    env = FastEnv(spec, width=ev.image_size[0], height=ev.image_size[1])
-    task = env.task
-    t0 = time.perf_counter()
-
-    def log(i, ep):
-        if recorder is not None and i < ev.record_episodes:
-            recorder.log_episode(i, ep, task, spec.scope.fov_deg, ev.image_size)
-
-    # the scripted expert's episodes do not depend on the agent: with a second CPU they run beside it
-    expert = Beside(lambda: expert_summary(spec, seeds), fork=spec.train.workers > 1) if ev.expert else None
-    try:
-        agent, _ = evaluate(env, policy, seeds, ev.image_every, ev.record_episodes, on_episode=log)
-        out = {"agent": agent, "seeds": seeds}
-        if expert is not None:
-            out["expert"] = expert.result()
-    finally:
-        if expert is not None:
-            expert.cancel()
-        env.close()
-    out["eval_seconds"] = time.perf_counter() - t0
-    return out
-
-
-def expert_summary(spec: TaskSpec, seeds: list[int]) -> dict:
-    """The scripted expert's evaluation figures on the given seeds (no images, no recording).
-
-    The expert acts on the task's state, so it goes without image observations: rendering in a child forked
-    after this process rendered (the evaluation during training) would deadlock in Mesa's EGL."""
-    env = FastEnv(without_images(spec))
-    expert = ScriptedExpert(env)
-    summary, _ = evaluate(env, expert.act, seeds, on_reset=expert.reset)
-    env.close()
-    return summary
-
-
-def without_images(spec: TaskSpec) -> TaskSpec:
-    """The spec with the kinematic observation alone."""
-    if spec.observation.image is None:
-        return spec
-    return spec.model_copy(update={"observation": spec.observation.model_copy(update={"image": None})})
-
-
-def evaluate_saved(run: Path, episodes: int | None = None) -> dict:
-    """Re-evaluate a saved run's policy without touching its recording (Ctrl-C or SIGTERM: EvaluationInterrupted)."""
-    with stop_on_sigterm():
-        try:
-            spec, policy = load_policy(run)
-            if episodes:
-                spec = spec.model_copy(update={"evaluate": spec.evaluate.model_copy(update={"episodes": episodes})})
-            return evaluate_run(spec, policy, None, None)
-        except KeyboardInterrupt as stop:
-            raise EvaluationInterrupted(Path(run), signal_name(stop)) from None
-
-
-def evaluate_expert(spec_path, overrides=(), episodes: int | None = None) -> dict:
-    """Evaluate the scripted expert alone on a spec's evaluation seeds."""
-    spec = load_spec(spec_path, overrides)
-    ev = spec.evaluate
-    seeds = [ev.seed + i for i in range(episodes or ev.episodes)]
-    t0 = time.perf_counter()
-    summary = expert_summary(spec, seeds)
-    return {"expert": summary, "seeds": seeds, "eval_seconds": time.perf_counter() - t0}

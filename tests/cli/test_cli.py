@@ -14,7 +14,7 @@ import pytest
 from typer.testing import CliRunner
 
 import fastrl
-import fastrl.model
+import fastrl.model.loaded
 from fastrl.cli import app
 from fastrl.model import compile_task
 from fastrl.spec import SpecError, load_spec
@@ -148,7 +148,7 @@ def test_check_compile_error(monkeypatch):
     def broken(spec):
         raise ValueError("Error: mesh 'dome' not found\nElement name 'x', id 3")
 
-    monkeypatch.setattr(fastrl.model, "compile_task", broken)
+    monkeypatch.setattr(fastrl.model.loaded, "compile_task", broken)
     result = invoke("check", GOOD[0])
     assert result.exit_code == 2
     assert result.stderr.strip() == (

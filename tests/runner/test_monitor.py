@@ -5,7 +5,15 @@ import json
 import torch
 
 from fastrl.agents.sb3 import build_model, make_vec_env
-from fastrl.runner.monitor import TrainingMonitor
+from fastrl.runner.monitor import (
+    Checkpoints,
+    CurvePoints,
+    EpisodeTally,
+    PeriodicEvaluation,
+    ProgressBar,
+    StopAtSubtasks,
+    TrainingMonitor,
+)
 from fastrl.spec import load_spec
 
 from ..conftest import spec_file
@@ -33,19 +41,15 @@ def test_evaluations_during_training_are_logged_and_can_stop_it(tmp_path):
         return {"eval/subtasks": next(scores)}
 
     part = Counter()
-    monitor = TrainingMonitor(
-        tmp_path,
-        list(spec.reward.features),
-        total=4096,
-        log_every=10_000,
-        checkpoint_every=192,
-        progress=False,
-        stats=lambda: {"irl/disc_accuracy": 0.75},
-        parts={"disc": part},
-        evaluator=evaluator,
-        eval_every=128,
-        stop_at=0.9,
+    tally = EpisodeTally(feature_names=list(spec.reward.features))
+    evaluation = PeriodicEvaluation(evaluator=evaluator, every=128)
+    points = CurvePoints(
+        run=tmp_path, tally=tally, log_every=10_000, evaluation=evaluation, stats=lambda: {"irl/disc_accuracy": 0.75}
     )
+    checkpoints = Checkpoints(run=tmp_path, every=192, tally=tally, parts={"disc": part})
+    stop = StopAtSubtasks(evaluation=evaluation, at=0.9)
+    bar = ProgressBar(total=4096, enabled=False)
+    monitor = TrainingMonitor([tally, bar, evaluation, points, checkpoints, stop])
     model.learn(4096, callback=monitor)
     assert monitor.stopped_early and len(calls) == 3 and model.num_timesteps < 4096
     rows = [json.loads(line) for line in (tmp_path / "metrics.jsonl").read_text().splitlines()]
