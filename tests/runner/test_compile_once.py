@@ -6,7 +6,7 @@ import pytest
 
 from fastrl.model import compiler
 
-from .conftest import spec_file
+from ..conftest import spec_file
 from .test_irl_runner import GENERATOR, invoke
 
 TINY = ["train.n_envs=2", "train.workers=1", "evaluate.episodes=1", "evaluate.image_every=0", "episode.time_limit=4"]
