@@ -24,7 +24,8 @@ from torch import nn
 
 from ..atomic import atomic_write
 from .discriminator import Discriminator
-from .networks import FORMAT, HEADER_KEY, Networks, load_networks  # noqa: F401  (loading beside saving)
+from .network_parts import FORMAT, HEADER_KEY
+from .networks import Networks, load_networks  # noqa: F401  (loading beside saving)
 
 ACTIVATIONS = {nn.Tanh: "tanh", nn.ReLU: "relu"}
 
