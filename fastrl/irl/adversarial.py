@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.vec_env import VecNormalize
 
 from .discriminator import Discriminator, augment
 from .fitting import DiscriminatorFit, Transitions, make_batch
@@ -47,6 +48,7 @@ class AdversarialCallback(BaseCallback):
         self.stats: dict[str, float] = {}
         self.ranked, self.ranking_weight = ranked, ranking_weight
         self.ranking_rng = np.random.default_rng(seed + 1)
+        self._frozen_states: torch.Tensor | None = None
 
     def _on_rollout_start(self) -> None:
         self.next_obs, self.terminal, self.env_rewards, self.dones = [], [], [], []
@@ -89,6 +91,17 @@ class AdversarialCallback(BaseCallback):
         self.history.add(raw)
         return policy
 
+    def _ranked_states(self):
+        """The ranking rollouts' states as the discriminator sees them now: once for all while the observation
+        normalisation is frozen (a cloned generator keeps the clone's), else again after each rollout."""
+        env = self.model.get_env()
+        frozen = not isinstance(env, VecNormalize) or not env.training
+        if frozen and self._frozen_states is not None:
+            return self._frozen_states
+        states = self.ranked.states(lambda o: normalize_obs(self.model, o))
+        self._frozen_states = states if frozen else None
+        return states
+
     def _on_rollout_end(self) -> None:
         buf = self.model.rollout_buffer
         n, e = buf.buffer_size, buf.n_envs
@@ -98,7 +111,7 @@ class AdversarialCallback(BaseCallback):
         policy = rollout if self.history is None else self._with_history(rollout, term)
         expert = transitions_batch(self.model, self.expert, self.disc)
         if self.ranked is not None:
-            states = self.ranked.states(lambda o: normalize_obs(self.model, o))
+            states = self._ranked_states()
             self.fit.ranking = lambda: self.ranking_weight * self.ranked.loss(self.disc, states, self.ranking_rng)
         self.stats.update(self.fit.epochs(policy, expert, self.n_epochs))
         self.stats.update(self.fit.reward_stats(rollout, expert))

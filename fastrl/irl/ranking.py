@@ -43,6 +43,38 @@ def noisy_expert_rollout(
     return observations.astype(np.float32), traj.meta["subtasks"] >= traj.meta["subtasks_total"]
 
 
+def noisy_rollouts_batched(
+    envs: list, act_batch: Callable[[np.ndarray], np.ndarray], noise: list[float], seeds: list[int], repeat: int = 1
+) -> list[tuple[np.ndarray, bool]]:
+    """noisy_expert_rollout of a deterministic batch policy for each (noise, seed) pair, one env each (`envs` at
+    least as many), stepped in lockstep with one policy call per step: the same rollouts, not one call per step each."""
+    n = len(seeds)
+    rngs = [np.random.default_rng(seed) for seed in seeds]
+    held, left = [None] * n, [0] * n
+    obs, traces, ended = [], [], [False] * n
+    for env, seed in zip(envs, seeds):
+        env.action_space.seed(seed)
+        obs.append(env.reset(seed=seed)[0])
+        traces.append([obs[-1]])
+    live = list(range(n))
+    while live:
+        actions = act_batch(np.stack([obs[i] for i in live]))
+        still = []
+        for i, action in zip(live, actions):
+            if left[i] == 0 and rngs[i].random() < noise[i]:
+                held[i], left[i] = envs[i].action_space.sample(), repeat
+            if left[i]:
+                action, left[i] = held[i], left[i] - 1
+            obs[i], _, term, trunc, info = envs[i].step(action)
+            traces[i].append(obs[i])
+            if term or trunc:
+                ended[i] = info["subtask"] >= info["subtasks_total"]
+            else:
+                still.append(i)
+        live = still
+    return [(np.array(t).astype(np.float32), e) for t, e in zip(traces, ended)]
+
+
 DEGRADE = ("drift", "jitter", "slowed")  # the kinematic overlays a recording's degraded copies carry, each at eps
 
 
@@ -59,7 +91,8 @@ def degraded_recording(env, traj: Trajectory, eps: float, seed: int) -> tuple[np
 
 class RankedRollouts:
     """Noisy rollouts of the scripted expert (or `actor`), and with `recordings` degraded copies of them, padded to
-    one length; their noise, and r_psi's ranking loss over pairs of the same source."""
+    one length; their noise, and r_psi's ranking loss over pairs of the same source. With `envs` (one per rollout)
+    an actor with `act_batch(observations)` rolls out in lockstep."""
 
     def __init__(
         self,
@@ -72,13 +105,14 @@ class RankedRollouts:
         repeat: int = 1,
         actor=None,
         recordings: list[Trajectory] = (),
+        envs: list = (),
     ):
         expert = ScriptedExpert(env) if actor is None else actor  # actor: act(obs) and reset(), e.g. a cloned policy
-        runs = [
-            noisy_expert_rollout(env, expert, eps, seed + 1000 * i + k, repeat)
-            for i, eps in enumerate(noise)
-            for k in range(episodes)
-        ]
+        jobs = [(eps, seed + 1000 * i + k) for i, eps in enumerate(noise) for k in range(episodes)]
+        if envs and hasattr(expert, "act_batch"):  # a stateless policy: all rollouts in lockstep
+            runs = noisy_rollouts_batched(envs, expert.act_batch, *map(list, zip(*jobs)), repeat)
+        else:
+            runs = [noisy_expert_rollout(env, expert, eps, s, repeat) for eps, s in jobs]
         self.noise = np.repeat(np.asarray(noise, float), episodes)
         self.source = np.zeros(len(runs), int)
         copies = [(eps, r) for eps in noise for r in recordings if r.portal is not None and r.instruments is None]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import warnings
 
 from ..agents.bc import behaviour_clone
-from ..agents.sb3 import build_model, make_vec_env, policy_function
+from ..agents.sb3 import batch_policy, build_model, make_vec_env, policy_function
 from ..data.replay import demonstration_pairs
 from ..data.trajectory import Trajectory
 from ..env.fast_env import FastEnv
@@ -14,10 +14,11 @@ from ..spec.models import TaskSpec
 
 
 class ClonedActor:
-    """`act(obs)` of the deterministic cloned policy; `reset()` does nothing (the policy keeps no state)."""
+    """`act(obs)` of the deterministic cloned policy, `act_batch(observations)` of many at once; `reset()` does
+    nothing (the policy keeps no state)."""
 
-    def __init__(self, act):
-        self.act = act
+    def __init__(self, act, act_batch):
+        self.act, self.act_batch = act, act_batch
 
     def reset(self) -> None:
         """Nothing to forget between episodes."""
@@ -32,4 +33,4 @@ def cloned_actor(spec: TaskSpec, demos: list[Trajectory]) -> ClonedActor:
         model = build_model(spec, venv)
     obs, actions = demonstration_pairs(FastEnv(spec), demos)
     behaviour_clone(model, venv, obs, actions, bc.epochs, bc.batch_size, bc.learning_rate, spec.train.seed)
-    return ClonedActor(policy_function(model, venv))
+    return ClonedActor(policy_function(model, venv), batch_policy(model, venv))

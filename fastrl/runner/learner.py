@@ -187,6 +187,7 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
             repeat=d.ranking_repeat,
             actor=actor,
             recordings=demos if d.ranking_degraded else (),
+            envs=[] if actor is None else [FastEnv(spec) for _ in range(len(d.ranking_noise) * d.ranking_episodes)],
         )
     elif d.ranking and irl.algorithm == "airl":  # GAIL has no r_psi to rank, so it goes without a word
         console.print(

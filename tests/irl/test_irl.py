@@ -13,7 +13,8 @@ from fastrl.irl import AdversarialCallback, Discriminator
 from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.discriminator import absorbing_states, augment
 from fastrl.irl.fitting import DiscriminatorFit, input_gradient_norm, make_batch
-from fastrl.irl.ranking import RankedRollouts, noisy_expert_rollout
+from fastrl.irl.ranking import RankedRollouts, noisy_expert_rollout, noisy_rollouts_batched
+from fastrl.runner.cloned import ClonedActor
 from fastrl.spec import load_spec
 from fastrl.spec.columns import discriminator_inputs, reward_inputs
 
@@ -296,6 +297,23 @@ def test_a_held_random_action_is_repeated_for_its_steps():
     assert np.allclose(obs, np.array(held), atol=1e-6)
     varied, _ = noisy_expert_rollout(env, ScriptedExpert(env), 1.0, 3, repeat=1)
     assert not np.allclose(varied, obs)
+
+
+def test_a_batch_actor_rolls_out_in_lockstep_exactly_as_one_at_a_time():
+    spec = load_spec(spec_file("tracelines"), ["episode.time_limit=4"])
+    env = fastrl.make(spec)
+    w = np.random.default_rng(0).normal(size=(env.action_space.n, env.observation_space.shape[0]))
+    batch = lambda obs: np.argmax(obs @ w.T, axis=1)  # noqa: E731  a stateless deterministic policy
+    actor = ClonedActor(lambda obs: int(batch(obs[None])[0]), batch)
+    noise, seeds = [0.0, 0.5, 1.0], [11, 12, 13]
+    one = [noisy_expert_rollout(env, actor, eps, seed, repeat=3) for eps, seed in zip(noise, seeds)]
+    both = noisy_rollouts_batched([fastrl.make(spec) for _ in seeds], batch, noise, seeds, repeat=3)
+    for (a, end_a), (b, end_b) in zip(one, both):
+        assert a.shape == b.shape and np.array_equal(a, b) and end_a == end_b
+    assert not np.array_equal(one[0][0], one[2][0])  # the noise changed the rollout
+    ranked = RankedRollouts(env, noise, 1, seed=11, actor=actor, envs=[fastrl.make(spec) for _ in noise])
+    slow = RankedRollouts(env, noise, 1, seed=11, actor=actor)
+    assert np.array_equal(ranked.raw, slow.raw) and np.array_equal(ranked.absorbed, slow.absorbed)
 
 
 def test_degraded_copies_of_recordings_are_ranked_against_each_other_only():
