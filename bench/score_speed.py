@@ -22,6 +22,7 @@ import argparse
 import json
 import os
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -139,9 +140,15 @@ def main() -> None:
     trajectories = args.trajectories or make_cohort(ROOT)
     n = len(list(trajectories.glob("*.npz")))
     sides = [Side("this checkout", HERE, trajectories, run, args.out)]
-    if args.reference is not None:
+    if args.reference is not None:  # its own copy of the run: the run's caches are keyed by the version's spec hash
+        ref_run = args.out / "reference-run"
+        shutil.rmtree(ref_run, ignore_errors=True)
+        shutil.copytree(run, ref_run)
         sides.insert(
-            0, Side(f"reference {args.reference}", args.reference.resolve(), trajectories, run, args.out / "reference")
+            0,
+            Side(
+                f"reference {args.reference}", args.reference.resolve(), trajectories, ref_run, args.out / "reference"
+            ),
         )
     print(f"machine: {machine()}")
     print(f"run: {run}\ntrajectories: {trajectories} ({n} files)\ncommand: {' '.join(sides[-1].cmd[1:])}")
