@@ -3,6 +3,7 @@
 import json
 import os
 import re
+import resource
 import shutil
 import signal
 import subprocess
@@ -45,7 +46,7 @@ IRL = [  # GAIL and AIRL on PPO learn with irl.generator's envs and hyperparamet
     "irl.generator.ppo.batch_size=64",
     "irl.generator.ppo.n_epochs=1",
 ]
-LONG_EVAL = ["evaluate.episodes=3", "evaluate.record_episodes=3", "evaluate.image_every=3"]
+LONG_EVAL = ["evaluate.episodes=4", "evaluate.record_episodes=4", "evaluate.image_every=1"]  # seconds: time to stop in
 SPEC = str(spec_file("tracelines"))
 STAGES = {
     "training": ["run", SPEC, "--timesteps", "100000"],
@@ -268,8 +269,9 @@ def test_a_damaged_newest_checkpoint_is_reported_and_resume_falls_back(tmp_path)
     assert res.exit_code == 0 and "valid" in res.output, res.output
 
     # `fastrl eval` of the run, stopped by SIGTERM once it is well into its episodes: a plain stop, nothing written
+    imports = import_cpu_seconds()  # a SIGTERM before the handlers are set kills at the default: wait past them
     proc = start(["eval", str(run), "--episodes", "200", "-o", str(run / "again.json")], run, quiet=False)
-    wait_until(lambda: cpu_seconds(proc.pid) > 5.0, proc)
+    wait_until(lambda: cpu_seconds(proc.pid) > imports + 3.0, proc)
     proc.terminate()
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143 and "Traceback" not in err, err
@@ -281,6 +283,15 @@ def test_a_damaged_newest_checkpoint_is_reported_and_resume_falls_back(tmp_path)
     torn_note = f"note: {torn}: no state.json (it was being written when the run stopped); resume continues from"
     assert notes == [f"{torn_note} {latest_checkpoint(run)}"]
     assert not (run / "again.json").exists()
+
+
+def import_cpu_seconds() -> float:
+    """CPU seconds a fresh process spends importing what `fastrl eval` imports before it sets its stop handlers."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    code = "import fastrl.cli, fastrl.cli.training, fastrl.runner, fastrl.runner.saved, torch"
+    subprocess.run([sys.executable, "-c", code], check=True, env={**os.environ, "CI": "1", "MUJOCO_GL": "egl"})
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def cpu_seconds(pid: int) -> float:
