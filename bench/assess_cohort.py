@@ -22,9 +22,10 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import argparse
 import json
-import platform
 import time
 from pathlib import Path
+
+from common import machine_line
 
 TASKS = ("imagecentring", "periscoping", "tracelines")
 ROOT = Path("runs/bench-assess")
@@ -193,7 +194,7 @@ def main() -> None:
     if args.across:
         across_seeds(args.across)
         return
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}")
+    print(f"# {machine_line()}")
     results = {}
     if not args.timing_only:
         for task in args.tasks:

@@ -22,14 +22,11 @@ os.environ.setdefault("CI", "1")
 import argparse
 import json
 import statistics
-import sys
 import time
 from pathlib import Path
 
 import mujoco
 import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import machine_line  # noqa: E402
 
 from fastrl.agents.sb3 import build_model, make_vec_env  # noqa: E402

@@ -29,15 +29,10 @@ import sys
 import time
 from pathlib import Path
 
-from common import machine_line
+from common import load_after, machine_line
 
 HERE = Path(__file__).resolve().parent.parent  # this checkout: its fastrl is the one timed
 ROOT = Path("runs/bench-score")
-
-
-def machine() -> str:
-    """CPU model, cores and the load averages now."""
-    return machine_line()
 
 
 def fastrl(*args: str) -> subprocess.CompletedProcess:
@@ -150,7 +145,7 @@ def main() -> None:
                 f"reference {args.reference}", args.reference.resolve(), trajectories, ref_run, args.out / "reference"
             ),
         )
-    print(f"machine: {machine()}")
+    print(f"machine: {machine_line()}")
     print(f"run: {run}\ntrajectories: {trajectories} ({n} files)\ncommand: {' '.join(sides[-1].cmd[1:])}")
     imports = [sys.executable, "-c", "import fastrl.runner.assessment"]
     for side in sides:
@@ -174,7 +169,7 @@ def main() -> None:
     for side in sides:
         print(f"breakdown of the median run, {side.name} (s):")
         print("\n".join(side.breakdown(startup[side.name])))
-    print(f"load average after: {', '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    print(load_after())
 
 
 if __name__ == "__main__":
