@@ -20,6 +20,7 @@ from ..irl.network_files import has_networks
 from ..spec import load_spec
 from .archive import SAMPLE, Job, gathered, plan_job, sample_note
 from .helper import Helper, journaling, record_assessment, score_shared
+from .video_inputs import videos_as_trajectories
 
 
 @dataclass
@@ -73,6 +74,7 @@ def outputs_for(output: Path | None, run: Path | None) -> dict[str, Path]:
         "distributions": parent / f"{stem}_distributions.png",
         "rrd": parent / f"{stem}.rrd",
         "journal": parent / f"{stem}.journal.jsonl",
+        "videos": parent / f"{stem}_from_video",
     }
 
 
@@ -140,12 +142,18 @@ def assess(
     rerun skips those journaled with the same size and time (`fresh`: none). Beyond SAMPLE files, only a sample
     of them is kept whole for the pictures, the rest as scalars."""
     console = console or Console(stderr=True)
-    files = trajectory_files(inputs)
-    streaming = len(files) > SAMPLE
-    parallel = address is None and (Helper.worth_it(len(files)) if parallel is None else parallel)
     t0 = time.perf_counter()
     scorer, recording_id = load_scorer(run, spec_path)
     paths, seconds = outputs_for(output, run), {"load": time.perf_counter() - t0}
+    places = [run, run.parent] if run is not None else []
+    inputs, videos, _ = videos_as_trajectories(
+        inputs, scorer.spec, paths["videos"], places=places, console=console, progress=progress
+    )
+    if videos.written or videos.errors:
+        seconds["videos"] = videos.seconds
+    files = trajectory_files(inputs)
+    streaming = len(files) > SAMPLE
+    parallel = address is None and (Helper.worth_it(len(files)) if parallel is None else parallel)
     networks = run / "networks" if run is not None and has_networks(run / "networks") else None
     cache = run / "assessment" / "references.json" if run is not None else None
     journal = Journal(path=paths["journal"], identity=identity(run / "spec.yaml" if run else spec_path, networks))
@@ -205,7 +213,7 @@ def assess(
             early = _run(helper, draw_path_figures, kept, devs, by, paths, radius)
             seconds["pictures"] = time.perf_counter() - t0
         t0 = time.perf_counter()
-        report = build_report(everything, done.references, problems, done.learned)
+        report = build_report(everything, done.references, videos.errors + problems, done.learned)
         if recordings is not None:  # 1 is the recordings learned from, not the scripted expert
             report["normalisation"] = report["normalisation"].replace("scripted expert", "recordings learned from")
             report["warnings"] = [w.replace("scripted expert", "recordings learned from") for w in report["warnings"]]

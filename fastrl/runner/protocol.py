@@ -4,6 +4,7 @@ the best K without their actions, score them all, and keep the learned networks 
 from __future__ import annotations
 
 import json
+import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,6 +19,7 @@ from ..data.trajectory import Trajectory, TrajectoryError
 from ..spec import load_spec
 from .assessment import Assessment, assess, outputs_for
 from .rundir import new_run_dir, update_meta, write_meta
+from .video_inputs import video_files, videos_as_trajectories
 
 BY = {
     "heuristic": "the spec's heuristic return (higher first)",
@@ -141,12 +143,14 @@ def run_protocol(
     if seeds < 1:
         raise ValueError(f"--seeds must be at least 1, got {seeds}")
     spec = load_spec(spec_path, overrides)
-    ranked, skipped = rank_recordings(spec, inputs, by, top)
+    run, inputs, skipped = _from_videos(inputs, spec, root, algorithm, console, progress)
+    ranked, unusable = rank_recordings(spec, inputs, by, top)
+    skipped += unusable
     if not ranked:
         first = f"; {len(skipped)} skipped, the first: {skipped[0]}" if skipped else ""
         raise FileNotFoundError(f"no recording could be read and replayed: nothing to learn from{first}")
     chosen = ranked[:top]
-    run = new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
+    run = run or new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
     write_meta(run, spec, str(spec_path), {"status": "learning", "overrides": list(overrides), "kind": "assess"})
     write_best(chosen, run / "best", keep_actions)
     rows = [{"file": s.name, "subject": s.subject, "skill": s.skill, **_criterion(s)} for s, _ in chosen]
@@ -232,6 +236,17 @@ def assess_seeds(
     write_text(files["json"], json.dumps(report, indent=2, default=float))
     done.files["json"] = files["json"]
     return done
+
+
+def _from_videos(inputs, spec, root: Path, algorithm: str, console: Console, progress: bool):
+    """(the run folder or None, the inputs, skipped videos): with videos among the inputs, the run starts here and
+    holds their estimated trajectories (from_video/) and the pose estimator that read them."""
+    if not video_files(inputs)[0]:
+        return None, list(inputs), []
+    run = new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
+    inputs, batch, source = videos_as_trajectories(inputs, spec, run / "from_video", console=console, progress=progress)
+    shutil.copy2(source, run / source.name)  # `fastrl score --run RUN/learned VIDEOS` reads with the same estimator
+    return run, inputs, batch.errors
 
 
 def _criterion(s: TrajectoryScores) -> dict:
