@@ -47,6 +47,7 @@ class TrajectoryScores:
     time: np.ndarray  # (n,) s, the replayed samples
     tip: np.ndarray  # (n, 3) camera (tip) positions
     values: np.ndarray | None = None  # (n,) learned value of each state
+    rewards: np.ndarray | None = None  # (n,) learned reward of each state
     normalised: dict[str, float] = field(default_factory=dict)
 
     @property
@@ -172,20 +173,22 @@ def held_to_limit(traj: Trajectory, spec: TaskSpec, replayed: int) -> Trajectory
 
 def learned_scores(networks, obs: np.ndarray) -> dict:
     """Learned return, mean value and mean potential of one trajectory's observations, and the value of each state
-    ("values"); each trajectory is evaluated as one batch, so its numbers never depend on the others."""
-    values = networks.value(obs).astype(float)
+    ("values") and reward ("rewards"); each trajectory is evaluated as one batch, so its numbers never depend on
+    the others."""
+    values, rewards = networks.value(obs).astype(float), networks.reward(obs).astype(float)
     return {
-        "reward": float(networks.reward(obs).sum()),
+        "reward": float(rewards.sum()),
         "value": float(values.mean()),
         "potential": float(networks.potential(obs).mean()) if networks.has_potential else None,
         "values": values,
+        "rewards": rewards,
     }
 
 
 def with_learned(scored: TrajectoryScores, learned: dict) -> None:
-    """Fill a trajectory's learned scores and per-state values from learned_scores' dict."""
-    scored.values = learned["values"]
-    scored.scores.update({k: v for k, v in learned.items() if k != "values"})
+    """Fill a trajectory's learned scores and per-state values and rewards from learned_scores' dict."""
+    scored.values, scored.rewards = learned["values"], learned["rewards"]
+    scored.scores.update({k: v for k, v in learned.items() if k not in ("values", "rewards")})
 
 
 def normalise(scored: list[TrajectoryScores], references: dict) -> None:

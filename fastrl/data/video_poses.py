@@ -5,6 +5,8 @@ the task hash, the frame size and the estimator's version; its held-out error tr
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 from pathlib import Path
 
@@ -29,10 +31,17 @@ def cache_dir() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "fastrl"
 
 
+def world_hash(spec: TaskSpec) -> str:
+    """SHA-256 of what the endoscope shows: the task's world without its cue's tolerances (16 hex digits)."""
+    world = spec.model_dump(mode="json", include={"scene", "scope", "task", "instruments"})
+    world["task"].pop("cue", None)
+    return hashlib.sha256(json.dumps(world, sort_keys=True, separators=(",", ":")).encode()).hexdigest()[:16]
+
+
 def estimator_name(spec: TaskSpec) -> str:
-    """The file name of this task's estimator: its task hash, frame size and the estimator's version."""
+    """The file name of this task's estimator: the hash of its world, the frame size and the estimator's version."""
     w, h = endoscope_size(spec)
-    return f"pose-{task_hash(spec)[:16]}-{w}x{h}-v{VERSION}.safetensors"
+    return f"pose-{world_hash(spec)}-{w}x{h}-v{VERSION}.safetensors"
 
 
 def train_estimator(env, *, seed: int = 0, episodes: int = EPISODES, epochs: int = EPOCHS, progress=None):

@@ -136,8 +136,9 @@ def log_assessment(
                     indexes=[rr.TimeColumn("percent", sequence=np.arange(len(d)))],
                     columns=rr.Scalars.columns(scalars=d),
                 )
+        videos = [v for v in (_log_video(rec, s, f"videos/{_slug(s.name)}") for s in scored) if v]
         _log_summary(rec, report)
-        rec.send_blueprint(_blueprint(report))
+        rec.send_blueprint(_blueprint(report, videos[:1]))
     finally:
         rec.flush()
         rec.disconnect()
@@ -178,14 +179,44 @@ def _log_summary(rec: rr.RecordingStream, report: dict) -> None:
     )
 
 
-def _blueprint(report: dict) -> rrb.Blueprint:
-    """3D paths and the XY projection on top; deviation curves and the table below."""
+def _log_video(rec: rr.RecordingStream, s, entity: str) -> str | None:
+    """A trajectory read from a video: the video as an asset, its learned reward and value per frame beside it on
+    the `video_time` timeline; the entity, or None for a trajectory without a video file."""
+    from .video import log_video  # here: log.video imports from this module
+
+    source = Path(str(s.meta.get("imported_from", "")))
+    if s.meta.get("portal_from") != "video" or not source.is_file() or s.values is None:
+        return None
+    log_video(rec, entity, source)
+    seconds = s.time - s.time[0]
+    for name, series in (("value", s.values), ("reward", s.rewards)):
+        if series is not None:
+            rec.send_columns(
+                f"{entity}_scores/{name}",
+                indexes=[rr.TimeColumn("video_time", duration=seconds[: len(series)])],
+                columns=rr.Scalars.columns(scalars=series[: len(seconds)]),
+            )
+    return entity
+
+
+def _blueprint(report: dict, videos: list[str] = ()) -> rrb.Blueprint:
+    """3D paths and the XY projection on top (and the first video with its learned scores per frame, if any);
+    deviation curves and the table below."""
     bars = [rrb.BarChartView(origin=f"/assessment/scores/{k}", name=k) for k in report["scores"]]
+    shown = [
+        view
+        for v in videos
+        for view in (
+            rrb.Spatial2DView(origin=f"/{v}", name=f"video {v.rsplit('/', 1)[-1]}"),
+            rrb.TimeSeriesView(origin=f"/{v}_scores", name="learned reward and value per frame"),
+        )
+    ]
     return rrb.Blueprint(
         rrb.Vertical(
             rrb.Horizontal(
                 rrb.Spatial3DView(origin="/world", name="paths by learned value (3D)"),
                 rrb.Spatial2DView(origin="/assessment/xy", name="XY projection (mm, y up)"),
+                *shown,
             ),
             rrb.Horizontal(
                 rrb.TimeSeriesView(origin="/assessment/deviation", name="deviation from expert (mm) by % done"),

@@ -19,7 +19,7 @@ from ..data.trajectory import Trajectory, TrajectoryError
 from ..spec import load_spec
 from .assessment import Assessment, assess, outputs_for
 from .rundir import new_run_dir, update_meta, write_meta
-from .video_inputs import video_files, videos_as_trajectories
+from .video_inputs import video_files, video_overrides, videos_as_trajectories
 
 BY = {
     "heuristic": "the spec's heuristic return (higher first)",
@@ -78,7 +78,7 @@ def rank_recordings(
             skipped.append(f"{path}: {e}")
             continue
         if top is not None:
-            scored.time, scored.tip, scored.values = np.empty(0), np.empty((0, 3)), None
+            scored.time, scored.tip, scored.values, scored.rewards = np.empty(0), np.empty((0, 3)), None, None
         ranked.append((scored, traj))
         if top is not None and len(ranked) > 2 * top:  # keep the trajectories of the best `top` so far only
             ranked = _drop_trajectories(ranked, by, top)
@@ -143,10 +143,15 @@ def run_protocol(
     if seeds < 1:
         raise ValueError(f"--seeds must be at least 1, got {seeds}")
     spec = load_spec(spec_path, overrides)
+    if video_files(inputs)[0]:  # poses read off videos are coarser: the cue's centring tolerance widens with them
+        overrides = [*overrides, *video_overrides(spec)]
+        spec = load_spec(spec_path, overrides)
     run, inputs, skipped = _from_videos(inputs, spec, root, algorithm, console, progress)
     ranked, unusable = rank_recordings(spec, inputs, by, top)
     skipped += unusable
     if not ranked:
+        if run is not None:  # only the unusable videos' poses were written: nothing to keep
+            shutil.rmtree(run)
         first = f"; {len(skipped)} skipped, the first: {skipped[0]}" if skipped else ""
         raise FileNotFoundError(f"no recording could be read and replayed: nothing to learn from{first}")
     chosen = ranked[:top]

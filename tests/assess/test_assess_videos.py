@@ -14,6 +14,7 @@ from fastrl.data.cohort import make_cohort
 from fastrl.data.pose_frames import labelled_frames
 from fastrl.data.render_video import write_trajectory_video
 from fastrl.data.video_poses import estimator_name
+from fastrl.runner.video_inputs import VIDEO_CENTRING
 from fastrl.spec import load_spec
 
 from ..runner.test_runner import rrd_verify
@@ -63,6 +64,8 @@ def test_assess_learns_from_videos_alone_and_scores_them_later(videos, tmp_path,
     read = [Trajectory.load(f) for f in sorted((run / "from_video").glob("*.npz"))]
     assert len(read) == 3 and all(t.meta["portal_from"] == "video" and t.portal.shape[1] == 5 for t in read)
     assert (run / estimator_name(load_spec(NO_EXPERT, AT_64))).is_file()  # kept with the run that used it
+    widened = load_spec(run / "learned" / "spec.yaml").task.cue.centring_deg
+    assert widened == VIDEO_CENTRING * load_spec(NO_EXPERT).task.cue.centring_deg  # poses off video are coarser
     # later, on a machine without the cache: the run's own estimator reads new videos
     monkeypatch.setenv("FASTRL_CACHE", str(tmp_path / "empty-cache"))
     new = tmp_path / "new.json"
