@@ -9,6 +9,7 @@ import numpy as np
 
 from ..model.compiler import CompiledTask
 from ..spec.images import DEPTH_MM_PER_LEVEL, SEGMENTATION_CLASSES, SEGMENTATION_STEP, Image
+from .lean_scene import LeanScene
 from .looks import RandomLooks
 
 _OPTION = mujoco.MjvOption()
@@ -46,7 +47,7 @@ def visible_geoms(model: mujoco.MjModel, data: mujoco.MjData, camera: int, cos_h
 class EndoscopeFrames:
     """Renders the endoscope as the policy sees it and keeps the last `stack` frames (H, W, C * stack) uint8."""
 
-    def __init__(self, *, task: CompiledTask, model: mujoco.MjModel, image: Image):
+    def __init__(self, *, task: CompiledTask, model: mujoco.MjModel, image: Image, lean: bool = True):
         self.task, self.model, self.image = task, model, image
         self.camera = task.camera
         half = math.radians(0.5 * model.cam_fovy[self.camera])
@@ -57,16 +58,20 @@ class EndoscopeFrames:
         self.shape = (image.size, image.size, image.channels * image.stack)
         self.frames = np.zeros(self.shape, np.uint8)
         self.renderer: mujoco.Renderer | None = None  # made on first use: in the process that steps the env
+        self.lean: LeanScene | bool = lean  # the fixed geoms drawn as meshes (fastrl.env.lean_scene); False: as built
 
     def _render(self, data: mujoco.MjData) -> np.ndarray:
         """The raw frame: rgb uint8, depth float metres or segmentation ids, geoms out of view left out."""
-        m, kind = self.model, self.image.kind
+        kind = self.image.kind
         if self.renderer is None:
-            self.renderer = mujoco.Renderer(m, self.image.size, self.image.size)
+            self.lean = self.lean and LeanScene(task=self.task, model=self.model)
+            model = self.lean.model if self.lean else self.model
+            self.renderer = mujoco.Renderer(model, self.image.size, self.image.size)
             if kind == "depth":
                 self.renderer.enable_depth_rendering()
             elif kind == "segmentation":
                 self.renderer.enable_segmentation_rendering()
+        m, data = (self.lean.model, self.lean.sync(data)) if self.lean else (self.model, data)
         hidden = ~visible_geoms(m, data, self.camera, self.cos_half)
         alpha = m.geom_rgba[hidden, 3].copy()
         m.geom_rgba[hidden, 3] = 0.0  # a geom of alpha 0 is not drawn: out of view, it costs nothing
