@@ -209,21 +209,21 @@ class LeanScene:
     """The lean model and its data, given the env's poses, colours and lighting before each frame."""
 
     def __init__(self, *, task: CompiledTask, model: mujoco.MjModel):
-        self.env_model = model
         fixed = fixed_geoms(model, task.avatar_geoms.ravel())
         self.model = lean_model(task, model, fixed)
         self.data = mujoco.MjData(self.model)
         mujoco.mj_kinematics(self.model, self.data)  # the meshes' poses: fixed
         self.moving = np.setdiff1d(np.arange(model.ngeom), fixed)
+        lm, h, lh = self.model, model.vis.headlight, self.model.vis.headlight  # what randomised looks change:
+        self.copies = [(lm.geom_rgba, model.geom_rgba), (lm.light_diffuse, model.light_diffuse)]
+        self.copies += [(lh.ambient, h.ambient), (lh.diffuse, h.diffuse), (lh.specular, h.specular)]
 
     def sync(self, data: mujoco.MjData) -> mujoco.MjData:
         """Copy the env's geom poses, colours, camera and lights into the lean model and data; the data to draw."""
-        m, lm, ld, g = self.env_model, self.model, self.data, self.moving
+        ld, g = self.data, self.moving
         ld.geom_xpos[g], ld.geom_xmat[g] = data.geom_xpos[g], data.geom_xmat[g]
-        lm.geom_rgba[:] = m.geom_rgba
         ld.cam_xpos[:], ld.cam_xmat[:] = data.cam_xpos, data.cam_xmat
         ld.light_xpos[:], ld.light_xdir[:] = data.light_xpos, data.light_xdir
-        lm.light_diffuse[:] = m.light_diffuse
-        for a in ("ambient", "diffuse", "specular"):
-            getattr(lm.vis.headlight, a)[:] = getattr(m.vis.headlight, a)
+        for mine, env in self.copies:
+            mine[:] = env
         return ld
