@@ -6,8 +6,8 @@ In one run, on TraceLines states along a seeded random walk (the same states for
   processes   frames/s of the renderer as built (mujoco.Renderer on the compiled model, geoms off the view cone
               not drawn) against the lean one (fastrl.env.lean_scene: the fixed geoms as meshes; the shipped
               default), rgb, per size, in 1 and in 2 processes at once (the target: >= 2,000 frames/s on 2 cores),
-              and at the policy's size the lean renderer with llvmpipe's LP_NUM_THREADS=0 (draws in the calling
-              thread) and =1; each measured in child processes of its own;
+              each process rendering every state by both in turn (so both meet the same load); then the same at
+              the policy's size with llvmpipe's LP_NUM_THREADS=0 (draws in the calling thread) and =1;
   renderers   one process, every option interleaved frame by frame (the same load for each), frames/s:
               gl-full            mujoco.Renderer on the whole scene (the compiled model's lean visual settings)
               built-KIND         the former renderer (the cull alone) for rgb, depth, segmentation
@@ -223,51 +223,50 @@ def renderers(sizes, rounds: int) -> list[dict]:
     return rows
 
 
-def _render_worker(size: int, seconds: float, lean: bool, threads: str | None, queue) -> None:
-    """One process rendering rgb frames for `seconds` (llvmpipe's threads set first): its frames/s."""
+def _render_worker(size: int, rounds: int, threads: str | None, queue) -> None:
+    """One process rendering rgb frames by the built and the lean renderer in turn: frames/s of each."""
     if threads is not None:
         os.environ["LP_NUM_THREADS"] = threads  # read when this process makes its first GL context
     env, states = walk()
     from fastrl.env.images import EndoscopeFrames
     from fastrl.spec.images import Image
 
-    frames = EndoscopeFrames(task=env.task, model=env.model, image=Image(size=size), lean=lean)
-    frames.frame(env.data, 0)  # the lean model is built outside the clock
-    fps, _ = timed(env, states, lambda d: frames.frame(d, 0), seconds)
-    queue.put(fps)
+    options = {}
+    for lean in (False, True):
+        frames = EndoscopeFrames(task=env.task, model=env.model, image=Image(size=size), lean=lean)
+        frames.frame(env.data, 0)  # the lean model is built outside the clock
+        options["lean" if lean else "built"] = lambda d, f=frames: f.frame(d, 0)
+    queue.put(interleaved(env, states, options, rounds)[0])
 
 
-def processes(n: int, size: int, seconds: float, lean: bool, threads: str | None = None) -> dict:
-    """Frames/s of a renderer in n processes at once, summed."""
+def processes(n: int, size: int, rounds: int, threads: str | None = None) -> dict:
+    """Frames/s of the built and the lean renderer (taking turns frame by frame) in n processes at once."""
     ctx = mp.get_context("fork")  # before this process makes a GL context: each child makes its own
     queue = ctx.Queue()
-    procs = [ctx.Process(target=_render_worker, args=(size, seconds, lean, threads, queue)) for _ in range(n)]
+    procs = [ctx.Process(target=_render_worker, args=(size, rounds, threads, queue)) for _ in range(n)]
     for p in procs:
         p.start()
     fps = [queue.get() for _ in procs]
     for p in procs:
         p.join()
-    return {
-        "renderer": "lean" if lean else "built",
-        "size": size,
-        "processes": n,
-        "LP_NUM_THREADS": threads or os.environ.get("LP_NUM_THREADS", "default"),
-        "frames_per_s_total": round(sum(fps), 1),
-        "per_process": [round(f, 1) for f in fps],
-    }
+    row = {"size": size, "processes": n, "LP_NUM_THREADS": threads or os.environ.get("LP_NUM_THREADS", "default")}
+    for name in ("built", "lean"):
+        row[f"{name}_frames_per_s"] = round(sum(f[name] for f in fps), 1)
+        row[f"{name}_per_process"] = [round(f[name], 1) for f in fps]
+    row["speedup"] = round(row["lean_frames_per_s"] / row["built_frames_per_s"], 2)
+    return row
 
 
-def process_table(sizes, policy_size: int, seconds: float) -> list[dict]:
-    """The built and the lean renderer per size in 1 and 2 processes, then llvmpipe's thread settings."""
+def process_table(sizes, policy_size: int, rounds: int) -> list[dict]:
+    """Both renderers per size in 1 and 2 processes, then at the policy's size per llvmpipe thread setting."""
     rows = []
-    for i, size in enumerate(sizes):
+    for size in sizes:
         for n in (1, 2):
-            for lean in (False, True) if i % 2 == 0 else (True, False):  # alternate which goes first
-                rows.append(processes(n, size, seconds, lean))
-                print("processes", rows[-1])
+            rows.append(processes(n, size, rounds))
+            print("processes", rows[-1])
     for threads in ("0", "1"):
         for n in (1, 2):
-            rows.append(processes(n, policy_size, seconds, True, threads))
+            rows.append(processes(n, policy_size, rounds, threads))
             print("processes", rows[-1])
     return rows
 
@@ -340,7 +339,7 @@ def main() -> None:
     out = {"machine": machine()}
     print(json.dumps(out["machine"]))
     # processes first: they fork before this process holds GL (the target: >= 2,000 frames/s on 2 cores)
-    out["processes"] = process_table(sizes, args.policy_size, args.seconds)
+    out["processes"] = process_table(sizes, args.policy_size, args.rounds)
     out["env"] = env_steps(sizes, 2 * args.seconds)  # forks its worker: before this process holds GL too
     for row in out["env"]:
         print("env", row)

@@ -126,7 +126,7 @@ def unit_shapes(model: mujoco.MjModel) -> dict:
     """The builtin shapes at the model's visual quality: name -> (vertices, normals), each (T, 3, 3).
 
     A capsule's tube is one ring of quads, not numstacks: the surface is the same, only the lighting, computed
-    at the vertices, is interpolated over longer quads (0.2% of the pixels differ, 0.001% by more than 8 levels).
+    at the vertices, is interpolated over longer quads (0.25% of the pixels differ, 0.002% by more than 8 levels).
     """
     q = model.vis.quality
     ns, nt = q.numslices, q.numstacks
@@ -139,8 +139,11 @@ def unit_shapes(model: mujoco.MjModel) -> dict:
     }
 
 
-def geom_triangles(model: mujoco.MjModel, data: mujoco.MjData, g: int, shapes: dict) -> tuple:
-    """Geom g's triangles in the world frame as the renderer draws them: vertices and unit normals, (T, 3, 3)."""
+def geom_triangles(model: mujoco.MjModel, data: mujoco.MjData, g: int, shapes: dict, bottom: bool = True) -> tuple:
+    """Geom g's triangles in the world frame as the renderer draws them: vertices and unit normals, (T, 3, 3).
+
+    bottom=False leaves out a capsule's bottom half sphere (where another capsule's top one covers it).
+    """
     r, h = model.geom_size[g, 0], model.geom_size[g, 1]
     kind = model.geom_type[g]
     if kind == _G.mjGEOM_BOX:
@@ -148,7 +151,9 @@ def geom_triangles(model: mujoco.MjModel, data: mujoco.MjData, g: int, shapes: d
     elif kind == _G.mjGEOM_CYLINDER:
         parts = [("cylinder", (r, r, h), 0.0)]
     else:  # capsule: the open tube, then the two half spheres moved to its ends
-        parts = [("tube", (r, r, h), 0.0), ("top", (r, r, r), h - r), ("bottom", (r, r, r), r - h)]
+        parts = [("tube", (r, r, h), 0.0), ("top", (r, r, r), h - r), ("bottom", (r, r, r), r - h)][
+            : 3 if bottom else 2
+        ]
     pos = data.geom_xpos[g].astype(_F).astype(float)  # the float pose the renderer gets (mjvGeom)
     rot = data.geom_xmat[g].astype(_F).astype(float).reshape(3, 3)
     verts, normals = [], []
@@ -168,6 +173,21 @@ def fixed_geoms(model: mujoco.MjModel, moving: np.ndarray) -> np.ndarray:
     return np.flatnonzero(fixed)
 
 
+def covered_ends(model: mujoco.MjModel, data: mujoco.MjData, fixed: np.ndarray) -> set[int]:
+    """Capsules whose bottom end is another capsule's top end, alike in radius and colour (a polyline's joints).
+
+    The top half sphere there already draws the joint's outer side; the bottom one lies inside or on the union.
+    """
+    caps = [g for g in fixed if model.geom_type[g] == _G.mjGEOM_CAPSULE]
+    ends = {}
+    for g in caps:
+        axis = data.geom_xmat[g].reshape(3, 3)[:, 2] * model.geom_size[g, 1]
+        look = (model.geom_size[g, 0], *model.geom_rgba[g])
+        ends[g] = (tuple(np.round(data.geom_xpos[g] + axis, 9)), tuple(np.round(data.geom_xpos[g] - axis, 9)), look)
+    tops = {(top, look) for top, _, look in ends.values()}
+    return {g for g, (_, bottom, look) in ends.items() if (bottom, look) in tops}
+
+
 _CACHE: dict[str, mujoco.MjModel] = {}
 
 
@@ -179,9 +199,9 @@ def lean_model(task: CompiledTask, model: mujoco.MjModel, fixed: np.ndarray) -> 
         elements = list(spec.geoms)
         data = mujoco.MjData(model)
         mujoco.mj_kinematics(model, data)
-        shapes = unit_shapes(model)
+        shapes, covered = unit_shapes(model), covered_ends(model, data, fixed)
         for g in fixed:
-            v, n = geom_triangles(model, data, g, shapes)
+            v, n = geom_triangles(model, data, g, shapes, bottom=g not in covered)
             index = np.arange(3 * len(v), dtype=np.int32)
             spec.add_mesh(
                 name=f"lean_{g}",
