@@ -14,6 +14,7 @@ from .looks import RandomLooks
 
 _OPTION = mujoco.MjvOption()
 _OPTION.geomgroup[3] = 0  # the scope's internal masses around the camera
+_GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)  # an int: numpy compares an array with the enum one element at a time
 
 
 def segmentation_classes(model: mujoco.MjModel, task: CompiledTask) -> np.ndarray:
@@ -96,7 +97,7 @@ class EndoscopeFrames:
             disk, mark = self.task.avatar_geoms[subtask]
             classes[disk] = SEGMENTATION_CLASSES.index("active avatar")
             classes[mark] = SEGMENTATION_CLASSES.index("active avatar's up mark")
-        is_geom = (types == mujoco.mjtObj.mjOBJ_GEOM) & (ids >= 0)
+        is_geom = (types == _GEOM) & (ids >= 0)
         labels = np.where(is_geom, classes[np.where(is_geom, ids, 0)], 0)
         return (labels * SEGMENTATION_STEP).astype(np.uint8)[:, :, None]
 
