@@ -169,7 +169,7 @@ def geom_triangles(model: mujoco.MjModel, data: mujoco.MjData, g: int, shapes: d
 def fixed_geoms(model: mujoco.MjModel, moving: np.ndarray) -> np.ndarray:
     """The world's geoms drawn as boxes, cylinders or capsules that never move (all but those in `moving`)."""
     fixed = (model.geom_bodyid == 0) & np.isin(model.geom_type, _CONVERTED) & (model.geom_matid < 0)
-    fixed[moving] = False
+    fixed[np.asarray(moving, int)] = False
     return np.flatnonzero(fixed)
 
 
@@ -217,6 +217,7 @@ def lean_model(task: CompiledTask, model: mujoco.MjModel, fixed: np.ndarray) -> 
             e.type, e.meshname = _G.mjGEOM_MESH, f"lean_{g}"
             e.fromto = [np.nan] * 6
             e.pos, e.quat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
+            e.alt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT  # not the euler angles etc. it was built with
         lean = spec.compile()
         lean.stat.center[:] = model.stat.center  # the clipping planes follow the scene's extent, as compiled
         lean.stat.extent = model.stat.extent
