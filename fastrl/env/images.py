@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 
 import mujoco
 import numpy as np
@@ -85,7 +86,8 @@ class EndoscopeFrames:
         """The raw frame: rgb uint8, depth float metres or segmentation ids, geoms out of view left out."""
         if self.renderer is None:
             self.lean = self.lean and LeanScene(task=self.task, model=self.model)
-            key = (self.task.spec.model_dump_json(), self.image.size, self.image.kind) if self.lean else None
+            key = (os.getpid(), self.task.spec.model_dump_json(), self.image.size, self.image.kind)  # not a parent's
+            key = key if self.lean else None
             self.renderer = renderer(self.lean.model if self.lean else self.model, self.image, key)
         m, data = (self.lean.model, self.lean.sync(data)) if self.lean else (self.model, data)
         hidden = ~visible_geoms(m, data, self.camera, self.cos_half)
