@@ -1,6 +1,6 @@
 """Pixel observations on a 2-core CPU: renderer options per size, env steps/s with images, the encoder's cost.
 
-    python bench/pixel_throughput.py [--sizes 32,48,64] [--seconds S] [--json OUT]
+    python bench/pixel_throughput.py [--sizes 32,48,64] [--rounds R] [--seconds S] [--json OUT]
 
 In one run, on TraceLines states along a seeded random walk (the same states for every option):
   processes   frames/s of the renderer as built (mujoco.Renderer on the compiled model, geoms off the view cone
@@ -330,8 +330,8 @@ def main() -> None:
     """Run every measurement and print it with the machine and load."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="32,48,64")
-    parser.add_argument("--seconds", type=float, default=2.0, help="per timed option")
-    parser.add_argument("--rounds", type=int, default=2, help="passes over the states, interleaved renderers")
+    parser.add_argument("--seconds", type=float, default=2.0, help="half of each env steps/s measurement")
+    parser.add_argument("--rounds", type=int, default=2, help="passes over the 300 states per GL renderer")
     parser.add_argument("--policy-size", type=int, default=48, help="the size the shipped pixel spec uses")
     parser.add_argument("--json", type=Path)
     args = parser.parse_args()
