@@ -1,19 +1,24 @@
 """Pixel observations on a 2-core CPU: renderer options per size, env steps/s with images, the encoder's cost.
 
-    python bench/pixel_throughput.py [--sizes 32,48,64] [--seconds S] [--json OUT]
+    python bench/pixel_throughput.py [--sizes 32,48,64] [--rounds R] [--seconds S] [--json OUT]
 
 In one run, on TraceLines states along a seeded random walk (the same states for every option):
-  renderers   frames/s of each way to make the policy's frame, one process:
-              gl-full     mujoco.Renderer on the whole scene (the compiled model's lean visual settings)
-              gl-culled   the shipped renderer (fastrl.env.images): geoms off the view cone not drawn, rgb
-              gl-depth, gl-segmentation   the shipped renderer's other kinds
+  processes   frames/s of the renderer as built (mujoco.Renderer on the compiled model, geoms off the view cone
+              not drawn) against the lean one (fastrl.env.lean_scene: the fixed geoms as meshes; the shipped
+              default), rgb, per size, in 1 and in 2 processes at once (the target: >= 2,000 frames/s on 2 cores),
+              each process rendering every state by both in turn (so both meet the same load); then the same at
+              the policy's size with llvmpipe's LP_NUM_THREADS=0 (draws in the calling thread) and =1;
+  renderers   one process, every option interleaved frame by frame (the same load for each), frames/s:
+              gl-full            mujoco.Renderer on the whole scene (the compiled model's lean visual settings)
+              built-KIND         the former renderer (the cull alone) for rgb, depth, segmentation
+              lean-KIND          the shipped renderer, with its faithfulness: the share of pixels that differ
+                                 from built-KIND, and of those more than 8 levels apart
               rangefinder MuJoCo's per-pixel rangefinder on the endoscope camera (depth without GL; the tip
                           geom around the lens removed from the bench's copy of the model, else every ray hits it)
               multiray    mj_multiRay, one ray per pixel (the scope's shaft body and group 3 excluded)
               with each ray option's largest difference from GL depth (mm) as its faithfulness;
-  2 cores     the shipped renderer in 2 processes at once: frames/s across both (the target: >= 2,000);
   env         steps/s of 16 envs stepped by 2 processes (fastrl's vectorised env) with random actions:
-              kinematic state against rgb frames per size (stack 2);
+              kinematic state against rgb frames per size (stack 2), the shipped renderer;
   encoder     fastrl's CNN (PixelEncoder) forward + backward on a batch of 256 per size and stack, against
               SB3's NatureCNN at the sizes it takes (>= 36 px), one torch thread (as training uses).
 The machine, its load before and after, and the versions are printed beside the figures.
@@ -105,10 +110,30 @@ def gl_options(env, size: int) -> dict:
 
     opts = {"gl-full": gl_full}
     for kind in ("rgb", "depth", "segmentation"):
-        frames = EndoscopeFrames(task=env.task, model=env.model, image=Image(size=size, kind=kind))
-        name = "gl-culled" if kind == "rgb" else f"gl-{kind}"
-        opts[name] = lambda d, f=frames: f.frame(d, 0)
+        for lean in (False, True):
+            frames = EndoscopeFrames(task=env.task, model=env.model, image=Image(size=size, kind=kind), lean=lean)
+            frames.frame(env.data, 0)  # the lean model is built (once per process) outside the clock
+            opts[f"{'lean' if lean else 'built'}-{kind}"] = lambda d, f=frames: f.frame(d, 0)
     return opts
+
+
+def interleaved(env, states, options: dict, rounds: int) -> tuple[dict, dict]:
+    """Frames/s of each option, the options taking turns on every state (so each meets the same load); frames."""
+    m, d = env.model, env.data
+    spent, out, names = dict.fromkeys(options, 0.0), {k: [] for k in options}, list(options)
+    for r in range(rounds):
+        for i, q in enumerate(states):
+            d.qpos[:] = q
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_camlight(m, d)
+            k = (i + r) % len(names)
+            for name in names[k:] + names[:k]:
+                t = time.perf_counter()
+                img = options[name](d)
+                spent[name] += time.perf_counter() - t
+                if r == 0:
+                    out[name].append(np.array(img, copy=True))
+    return {k: rounds * len(states) / v for k, v in spent.items()}, out
 
 
 def rangefinder(size: int, env):
@@ -162,35 +187,35 @@ def multiray(size: int, env):
     return render
 
 
-def renderers(sizes, seconds: float) -> list[dict]:
-    """Frames/s of every option per size, with the ray options' largest depth difference from GL (mm)."""
+def renderers(sizes, rounds: int) -> list[dict]:
+    """Frames/s of every option per size, with the lean and ray options' faithfulness."""
     env, states = walk()
     rows = []
     for size in sizes:
-        gl = gl_options(env, size)
-        results = {}
-        for name, fn in gl.items():
-            fps, out = timed(env, states, fn, seconds)
-            results[name] = (fps, out)
-        reference = np.stack(results["gl-depth"][1])[..., 0].astype(float)
-        full, culled = np.stack(results["gl-full"][1]), np.stack(results["gl-culled"][1])
-        for name, fps_out in results.items():
-            row = {"size": size, "option": name, "frames_per_s": round(fps_out[0], 1)}
-            if name == "gl-culled":
-                row["pixels_equal_gl_full"] = bool(np.array_equal(full, culled))
+        fps, out = interleaved(env, states, gl_options(env, size), rounds)
+        frames = {k: np.stack(v).astype(int) for k, v in out.items()}
+        for name, rate in fps.items():
+            row = {"size": size, "option": name, "frames_per_s": round(rate, 1)}
+            if name == "built-rgb":
+                row["pixels_equal_gl_full"] = bool(np.array_equal(frames["gl-full"], frames[name]))
+            if name.startswith("lean"):
+                diff = np.abs(frames[name] - frames[name.replace("lean", "built")]).max(axis=-1)
+                row["pixels_differing_pct"] = round(100 * float((diff > 0).mean()), 4)
+                row["pixels_over_8_levels_pct"] = round(100 * float((diff > 8).mean()), 4)
             rows.append(row)
+        reference = frames["built-depth"][..., 0].astype(float)
         for name, make in (("rangefinder", rangefinder), ("multiray", multiray)):
             fn = make(size, env)
-            fps, out = timed(env, states, fn, seconds)
+            rate, out = timed(env, states, fn, 0.0)
             if name == "rangefinder":  # only the sensor's own time: the bench's copy redoes the kinematics
-                fps = len(states) / fn.spent if fn.spent else fps
+                rate = len(states) / fn.spent if fn.spent else rate
             depth = np.clip(np.rint(np.stack(out)), 0, 255)
             diff = np.abs(depth - reference)
             rows.append(
                 {
                     "size": size,
                     "option": name,
-                    "frames_per_s": round(fps, 1),
+                    "frames_per_s": round(rate, 1),
                     "depth_diff_mm_p99": float(np.percentile(diff, 99)),
                     "depth_diff_mm_max": float(diff.max()),
                 }
@@ -198,28 +223,52 @@ def renderers(sizes, seconds: float) -> list[dict]:
     return rows
 
 
-def _render_worker(size: int, seconds: float, queue) -> None:
-    """One process rendering the shipped rgb frames for `seconds`: its frame count and time."""
+def _render_worker(size: int, rounds: int, threads: str | None, queue) -> None:
+    """One process rendering rgb frames by the built and the lean renderer in turn: frames/s of each."""
+    if threads is not None:
+        os.environ["LP_NUM_THREADS"] = threads  # read when this process makes its first GL context
     env, states = walk()
     from fastrl.env.images import EndoscopeFrames
     from fastrl.spec.images import Image
 
-    frames = EndoscopeFrames(task=env.task, model=env.model, image=Image(size=size))
-    fps, _ = timed(env, states, lambda d: frames.frame(d, 0), seconds)
-    queue.put(fps)
+    options = {}
+    for lean in (False, True):
+        frames = EndoscopeFrames(task=env.task, model=env.model, image=Image(size=size), lean=lean)
+        frames.frame(env.data, 0)  # the lean model is built outside the clock
+        options["lean" if lean else "built"] = lambda d, f=frames: f.frame(d, 0)
+    queue.put(interleaved(env, states, options, rounds)[0])
 
 
-def two_cores(size: int, seconds: float) -> dict:
-    """The shipped renderer in two processes at once."""
+def processes(n: int, size: int, rounds: int, threads: str | None = None) -> dict:
+    """Frames/s of the built and the lean renderer (taking turns frame by frame) in n processes at once."""
     ctx = mp.get_context("fork")  # before this process makes a GL context: each child makes its own
     queue = ctx.Queue()
-    procs = [ctx.Process(target=_render_worker, args=(size, seconds, queue)) for _ in range(2)]
+    procs = [ctx.Process(target=_render_worker, args=(size, rounds, threads, queue)) for _ in range(n)]
     for p in procs:
         p.start()
     fps = [queue.get() for _ in procs]
     for p in procs:
         p.join()
-    return {"size": size, "processes": 2, "frames_per_s_total": round(sum(fps), 1), "per_process": fps}
+    row = {"size": size, "processes": n, "LP_NUM_THREADS": threads or os.environ.get("LP_NUM_THREADS", "default")}
+    for name in ("built", "lean"):
+        row[f"{name}_frames_per_s"] = round(sum(f[name] for f in fps), 1)
+        row[f"{name}_per_process"] = [round(f[name], 1) for f in fps]
+    row["speedup"] = round(row["lean_frames_per_s"] / row["built_frames_per_s"], 2)
+    return row
+
+
+def process_table(sizes, policy_size: int, rounds: int) -> list[dict]:
+    """Both renderers per size in 1 and 2 processes, then at the policy's size per llvmpipe thread setting."""
+    rows = []
+    for size in sizes:
+        for n in (1, 2):
+            rows.append(processes(n, size, rounds))
+            print("processes", rows[-1])
+    for threads in ("0", "1"):
+        for n in (1, 2):
+            rows.append(processes(n, policy_size, rounds, threads))
+            print("processes", rows[-1])
+    return rows
 
 
 def env_steps(sizes, seconds: float) -> list[dict]:
@@ -281,19 +330,20 @@ def main() -> None:
     """Run every measurement and print it with the machine and load."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="32,48,64")
-    parser.add_argument("--seconds", type=float, default=2.0, help="per timed option")
+    parser.add_argument("--seconds", type=float, default=2.0, help="half of each env steps/s measurement")
+    parser.add_argument("--rounds", type=int, default=2, help="passes over the 300 states per GL renderer")
     parser.add_argument("--policy-size", type=int, default=48, help="the size the shipped pixel spec uses")
     parser.add_argument("--json", type=Path)
     args = parser.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
     out = {"machine": machine()}
     print(json.dumps(out["machine"]))
-    out["two_cores"] = two_cores(args.policy_size, 2 * args.seconds)  # first: before this process holds GL
-    print("2 cores, shipped renderer:", out["two_cores"], "(target >= 2000 frames/s)")
+    # processes first: they fork before this process holds GL (the target: >= 2,000 frames/s on 2 cores)
+    out["processes"] = process_table(sizes, args.policy_size, args.rounds)
     out["env"] = env_steps(sizes, 2 * args.seconds)  # forks its worker: before this process holds GL too
     for row in out["env"]:
         print("env", row)
-    out["renderers"] = renderers(sizes, args.seconds)
+    out["renderers"] = renderers(sizes, args.rounds)
     for row in out["renderers"]:
         print("renderer", row)
     out["encoder"] = encoder_cost(sizes)

@@ -3,16 +3,20 @@
 from __future__ import annotations
 
 import math
+import os
 
 import mujoco
 import numpy as np
 
 from ..model.compiler import CompiledTask
 from ..spec.images import DEPTH_MM_PER_LEVEL, SEGMENTATION_CLASSES, SEGMENTATION_STEP, Image
+from .lean_scene import LeanScene
 from .looks import RandomLooks
 
 _OPTION = mujoco.MjvOption()
 _OPTION.geomgroup[3] = 0  # the scope's internal masses around the camera
+_GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)  # an int: numpy compares an array with the enum one element at a time
+_ALL = int(mujoco.mjtCatBit.mjCAT_ALL)
 
 
 def segmentation_classes(model: mujoco.MjModel, task: CompiledTask) -> np.ndarray:
@@ -43,10 +47,27 @@ def visible_geoms(model: mujoco.MjModel, data: mujoco.MjData, camera: int, cos_h
     return (outside < model.geom_rbound) | (dist < model.geom_rbound)
 
 
+_SHARED: dict[tuple, mujoco.Renderer] = {}  # per process: the lean envs of one task, size and kind share a context
+
+
+def renderer(model: mujoco.MjModel, image: Image, key: tuple | None) -> mujoco.Renderer:
+    """An offscreen renderer for the image's size and kind; one per key in a process (None: a new one)."""
+    if key in _SHARED:
+        return _SHARED[key]
+    r = mujoco.Renderer(model, image.size, image.size)
+    if image.kind == "depth":
+        r.enable_depth_rendering()
+    elif image.kind == "segmentation":
+        r.enable_segmentation_rendering()
+    if key is not None:
+        _SHARED[key] = r  # the lean models of a task are copies: the same meshes in every env's GL context
+    return r
+
+
 class EndoscopeFrames:
     """Renders the endoscope as the policy sees it and keeps the last `stack` frames (H, W, C * stack) uint8."""
 
-    def __init__(self, *, task: CompiledTask, model: mujoco.MjModel, image: Image):
+    def __init__(self, *, task: CompiledTask, model: mujoco.MjModel, image: Image, lean: bool = True):
         self.task, self.model, self.image = task, model, image
         self.camera = task.camera
         half = math.radians(0.5 * model.cam_fovy[self.camera])
@@ -57,21 +78,23 @@ class EndoscopeFrames:
         self.shape = (image.size, image.size, image.channels * image.stack)
         self.frames = np.zeros(self.shape, np.uint8)
         self.renderer: mujoco.Renderer | None = None  # made on first use: in the process that steps the env
+        self.view = mujoco.MjvCamera()
+        self.view.type, self.view.fixedcamid = mujoco.mjtCamera.mjCAMERA_FIXED, self.camera
+        self.lean: LeanScene | bool = lean  # the fixed geoms drawn as meshes (fastrl.env.lean_scene); False: as built
 
     def _render(self, data: mujoco.MjData) -> np.ndarray:
         """The raw frame: rgb uint8, depth float metres or segmentation ids, geoms out of view left out."""
-        m, kind = self.model, self.image.kind
         if self.renderer is None:
-            self.renderer = mujoco.Renderer(m, self.image.size, self.image.size)
-            if kind == "depth":
-                self.renderer.enable_depth_rendering()
-            elif kind == "segmentation":
-                self.renderer.enable_segmentation_rendering()
+            self.lean = self.lean and LeanScene(task=self.task, model=self.model)
+            key = (os.getpid(), self.task.spec.model_dump_json(), self.image.size, self.image.kind)  # not a parent's
+            key = key if self.lean else None
+            self.renderer = renderer(self.lean.model if self.lean else self.model, self.image, key)
+        m, data = (self.lean.model, self.lean.sync(data)) if self.lean else (self.model, data)
         hidden = ~visible_geoms(m, data, self.camera, self.cos_half)
         alpha = m.geom_rgba[hidden, 3].copy()
         m.geom_rgba[hidden, 3] = 0.0  # a geom of alpha 0 is not drawn: out of view, it costs nothing
         try:
-            self.renderer.update_scene(data, camera=self.camera, scene_option=_OPTION)
+            mujoco.mjv_updateScene(m, data, _OPTION, None, self.view, _ALL, self.renderer.scene)
         finally:
             m.geom_rgba[hidden, 3] = alpha
         return self.renderer.render()
@@ -91,7 +114,7 @@ class EndoscopeFrames:
             disk, mark = self.task.avatar_geoms[subtask]
             classes[disk] = SEGMENTATION_CLASSES.index("active avatar")
             classes[mark] = SEGMENTATION_CLASSES.index("active avatar's up mark")
-        is_geom = (types == mujoco.mjtObj.mjOBJ_GEOM) & (ids >= 0)
+        is_geom = (types == _GEOM) & (ids >= 0)
         labels = np.where(is_geom, classes[np.where(is_geom, ids, 0)], 0)
         return (labels * SEGMENTATION_STEP).astype(np.uint8)[:, :, None]
 
@@ -114,7 +137,7 @@ class EndoscopeFrames:
         return self.frames.copy()
 
     def close(self) -> None:
-        """Free the renderer."""
-        if self.renderer is not None:
+        """Free the renderer (a shared one stays for the process's other envs)."""
+        if self.renderer is not None and not self.lean:
             self.renderer.close()
-            self.renderer = None
+        self.renderer = None

@@ -10,7 +10,7 @@ from gymnasium.utils.env_checker import check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from fastrl.env.fast_env import FastEnv
-from fastrl.env.images import _OPTION
+from fastrl.env.images import _OPTION, EndoscopeFrames
 from fastrl.spec import SpecError, load_spec, spec_hash, task_hash
 from fastrl.spec.images import SEGMENTATION_CLASSES, SEGMENTATION_STEP
 
@@ -73,15 +73,18 @@ def test_gymnasium_and_sb3_checkers_pass(state):
 
 
 def test_culled_frames_match_the_full_scene():
+    """The cull alone (the model as built, not the lean meshes: tests/env/test_lean_scene.py) changes no pixel."""
     env = pixel_env(size=48)
     env.reset(seed=2)
+    culled = EndoscopeFrames(task=env.task, model=env.model, image=env.frames.image, lean=False)
     full = mujoco.Renderer(env.model, 48, 48)
     rng = np.random.default_rng(0)
     for a in rng.integers(0, 11, 40):
-        obs, *_ = env.step(int(a))
+        env.step(int(a))
         full.update_scene(env.data, camera=env.task.camera, scene_option=_OPTION)
-        np.testing.assert_array_equal(obs, full.render())
+        np.testing.assert_array_equal(culled.frame(env.data, 0), full.render())
     full.close()
+    culled.close()
 
 
 def test_depth_is_millimetres_along_the_optical_axis():
