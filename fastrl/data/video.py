@@ -90,6 +90,7 @@ def read_video(path: Path, size: tuple[int, int] | None = None, exact_size: bool
         _check_size(path, (w, h), size, exact_size)
         out_w, out_h = size or (w, h)
         frames, times, dropped = [], [], 0
+        reformatter = av.video.reformatter.VideoReformatter()  # one for the file: a frame's own makes a new context
         base = stream.time_base or Fraction(1, 1)
         rate = float(stream.average_rate or stream.guessed_rate or 0) or None
         try:
@@ -100,7 +101,8 @@ def read_video(path: Path, size: tuple[int, int] | None = None, exact_size: bool
                 if times and t <= times[-1]:
                     dropped += 1
                     continue
-                frames.append(frame.to_ndarray(format="rgb24", width=out_w, height=out_h, interpolation="AREA"))
+                rgb = reformatter.reformat(frame, format="rgb24", width=out_w, height=out_h, interpolation="AREA")
+                frames.append(rgb.to_ndarray())
                 times.append(t)
                 if len(frames) * out_w * out_h * 3 > MAX_DECODED_BYTES:
                     raise VideoError(
