@@ -11,7 +11,6 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from ..data.trajectory import TrajectoryError
 from ..data.video import VideoError
 from ..data.video_import import endoscope_size
-from ..data.video_poses import estimator_for, video_trajectory
 from ..env.fast_env import FastEnv
 from ..spec.models import TaskSpec
 from .video import VIDEO_SUFFIXES, Batch, _named
@@ -57,6 +56,8 @@ def videos_as_trajectories(
     batch = Batch()
     if not videos:
         return list(inputs), batch, None
+    from ..data.video_poses import estimator_for, video_trajectory  # here: scoring trajectories needs no torch
+
     w, h = endoscope_size(spec)
     env = FastEnv(spec, width=w, height=h)  # renders as the task's videos are rendered
     with _bar(progress, console) as bar:
