@@ -219,10 +219,13 @@ def _blueprint(report: dict, videos: list[str] = ()) -> rrb.Blueprint:
                 *shown,
             ),
             rrb.Horizontal(
-                rrb.TimeSeriesView(origin="/assessment/deviation", name="deviation from expert (mm) by % done"),
+                rrb.TimeSeriesView(
+                    origin="/assessment/deviation", name="deviation from expert (mm) by % done (timeline percent)"
+                ),
                 rrb.TextDocumentView(origin="/assessment/summary", name="scores"),
                 rrb.Tabs(*bars, name="group means") if bars else rrb.Spacer(),
             ),
         ),
+        *([rrb.TimePanel(timeline="video_time", state="collapsed")] if videos else []),  # the video plays
         collapse_panels=True,
     )
