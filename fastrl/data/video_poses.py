@@ -1,7 +1,8 @@
 """A trainee's video as portal coordinates: each frame read by the task's pose estimator, no tracker needed.
 
 The estimator is trained once per task on the simulator's own frames (`pose_frames`) and kept in a cache keyed by
-the task hash, the frame size and the estimator's version; its held-out error travels in every trajectory's meta."""
+what the camera shows (the task's world without its cue), the frame size and the estimator's version; its held-out
+error travels in every trajectory's meta."""
 
 from __future__ import annotations
 
