@@ -168,3 +168,42 @@ def test_image_workers_start_fresh_after_this_process_rendered():
         signal.signal(signal.SIGALRM, old)
         venv.close()
     assert obs.shape == (4, 32, 32, 6) and obs[2:].std() > 0  # the worker's envs rendered
+
+
+def test_warm_started_pixel_run_logs_its_dagger_rounds(tmp_path):
+    warm = ["demonstrations=2", "rounds=2", "episodes=1", "epochs=2", "batch_size=64"]
+    args = ["run", str(PIXELS), "--timesteps", "256", *[a for kv in TINY for a in ("--set", kv)]]
+    args += [a for kv in warm for a in ("--set", f"train.warm_start.{kv}")]
+    res = CliRunner().invoke(app, [*args, "--runs", str(tmp_path), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert "DAgger round 2" in res.output
+    run = only_run(tmp_path)
+    rows = [json.loads(line) for line in (run / "warm_start.jsonl").read_text().splitlines()]
+    assert [r["dagger_round"] for r in rows] == [0, 1, 2]
+    assert rows[0]["dagger_subtasks"] > 0  # the expert's own episodes (3 s long here) complete some subtasks
+    pairs = [r["dagger_pairs"] for r in rows]
+    assert pairs == sorted(pairs) and pairs[0] < pairs[1] and all(np.isfinite(r["dagger_loss"]) for r in rows)
+    meta = json.loads((run / "meta.json").read_text())
+    assert meta["status"] == "done" and meta["warm_start"]["pairs"] == pairs[-1]
+    assert "1 file verified" in rrd_verify(run / "recording.rrd")
+    entities, _ = recorded(run / "recording.rrd")
+    assert {"/metrics/warm_start/dagger_loss", "/metrics/warm_start/dagger_subtasks"} <= entities
+
+
+def test_dagger_labels_the_policys_states_with_the_experts_actions():
+    from fastrl.agents.dagger import labelled_episodes
+    from fastrl.agents.expert import ScriptedExpert
+
+    spec = load_spec(PIXELS, ["observation.image.size=32", "episode.time_limit=2"])
+    env = FastEnv(spec)
+    expert = ScriptedExpert(env)
+    led = labelled_episodes(env, expert, [5])
+    still = labelled_episodes(env, expert, [5], act=lambda obs: 0)  # a policy that never moves
+    assert len(still.labels) == 40 and still.subtasks == 0.0 and still.obs.shape == (40, 32, 32, 6)
+    assert (still.labels != 0).all()  # the expert would move it
+    assert np.array_equal(still.obs[0], led.obs[0]) and still.labels[0] == led.labels[0]
+    assert not np.array_equal(still.obs[5], led.obs[5])  # the expert's episode moved on
+    always = labelled_episodes(env, expert, [5], act=lambda obs: 0, expert_share=1.0)
+    assert np.array_equal(always.obs, led.obs) and np.array_equal(always.labels, led.labels)
+    half = labelled_episodes(env, expert, [5], act=lambda obs: 0, expert_share=0.5)
+    assert not np.array_equal(half.obs[5:10], led.obs[5:10]) and not np.array_equal(half.obs[5:10], still.obs[5:10])
