@@ -30,7 +30,7 @@ class CloneAnchor(BaseCallback):
             idx = self.rng.integers(0, len(self.raw_obs), BATCH)
             raw = self.raw_obs[idx]
             obs, _ = policy.obs_to_tensor(env.normalize_obs(raw) if normalize else raw)  # frames: channels first
-            _, log_prob, _ = policy.evaluate_actions(obs, self.actions[torch.as_tensor(idx)])
+            log_prob = policy.get_distribution(obs).log_prob(self.actions[torch.as_tensor(idx)])
             policy.optimizer.zero_grad()
             (-log_prob.mean()).backward()
             torch.nn.utils.clip_grad_norm_(policy.parameters(), self.model.max_grad_norm)
