@@ -94,7 +94,7 @@ def test_pixel_sac_learns_a_few_steps_and_its_buffer_is_bounded():
     from fastrl.agents.sb3 import build_model, make_vec_env
     from fastrl.spec import SpecError
 
-    base = ["train.algo=SAC", "actions.mode=rates", "observation.image.size=32"]
+    base = ["train.algo=SAC", "actions.mode=rates", "observation.image.size=32", "train.warm_start=null"]
     try:
         load_spec(PIXELS, base)  # 300k frames of 32 x 32 x 6, twice: 3.7 GB, under the limit
         load_spec(PIXELS, [*base, "observation.image.size=48"])
@@ -118,6 +118,7 @@ def test_behaviour_cloning_fits_a_pixel_policy_to_expert_frames(tmp_path):
         str(PIXELS),
         *[a for kv in TINY for a in ("--set", kv)],
         *("--set", "irl.algorithm=bc", "--set", "irl.demonstrations.expert=2", "--set", "irl.bc.epochs=3"),
+        *("--set", "train.warm_start=null"),
     ]
     res = CliRunner().invoke(app, [*args, "--runs", str(tmp_path), "--no-progress"])
     assert res.exit_code == 0, res.output
@@ -188,6 +189,14 @@ def test_warm_started_pixel_run_logs_its_dagger_rounds(tmp_path):
     assert "1 file verified" in rrd_verify(run / "recording.rrd")
     entities, _ = recorded(run / "recording.rrd")
     assert {"/metrics/warm_start/dagger_loss", "/metrics/warm_start/dagger_subtasks"} <= entities
+
+
+def test_warm_start_is_for_ppo_on_the_specs_reward():
+    from fastrl.spec import SpecError
+
+    for overrides in (["train.algo=SAC", "actions.mode=rates"], ["irl.algorithm=bc"]):
+        with pytest.raises(SpecError, match="train.warm_start: the warm start is for PPO"):
+            load_spec(PIXELS, overrides)
 
 
 def test_dagger_labels_the_policys_states_with_the_experts_actions():
