@@ -23,13 +23,14 @@ class CloneAnchor(BaseCallback):
         if self.model.num_timesteps == 0:  # no update yet: the clone as fitted
             return
         env = self.model.get_env()
-        obs = env.normalize_obs(self.raw_obs) if isinstance(env, VecNormalize) else self.raw_obs
-        obs = torch.as_tensor(obs, dtype=torch.float32)
         policy = self.model.policy
+        normalize = isinstance(env, VecNormalize) and env.norm_obs
         policy.set_training_mode(True)
         for _ in range(self.steps):
-            idx = torch.as_tensor(self.rng.integers(0, len(obs), BATCH))
-            _, log_prob, _ = policy.evaluate_actions(obs[idx], self.actions[idx])
+            idx = self.rng.integers(0, len(self.raw_obs), BATCH)
+            raw = self.raw_obs[idx]
+            obs, _ = policy.obs_to_tensor(env.normalize_obs(raw) if normalize else raw)  # frames: channels first
+            log_prob = policy.get_distribution(obs).log_prob(self.actions[torch.as_tensor(idx)])
             policy.optimizer.zero_grad()
             (-log_prob.mean()).backward()
             torch.nn.utils.clip_grad_norm_(policy.parameters(), self.model.max_grad_norm)

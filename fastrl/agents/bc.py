@@ -43,7 +43,8 @@ def behaviour_clone(
         for start in range(0, len(order), batch_size):
             idx = torch.as_tensor(order[start : start + batch_size])
             batch = {k: v[idx] for k, v in obs_t.items()} if isinstance(obs_t, dict) else obs_t[idx]
-            _, log_prob, entropy = policy.evaluate_actions(batch, act_t[idx])
+            dist = policy.get_distribution(batch)  # the actor alone: a value CNN of its own is not run
+            log_prob, entropy = dist.log_prob(act_t[idx]), dist.entropy()
             loss = -log_prob.mean() - 1e-3 * (entropy.mean() if entropy is not None else 0.0)
             optim.zero_grad()
             loss.backward()

@@ -68,6 +68,8 @@ def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) 
         policy = "MultiInputPolicy" if image.state else "CnnPolicy"
         extractor = {"features": enc.features, "shift": enc.shift}
         policy_kwargs |= {"features_extractor_class": PixelEncoder, "features_extractor_kwargs": extractor}
+        if enc.critic_cnn:
+            policy_kwargs["share_features_extractor"] = False
     return algo(
         policy,
         venv,

@@ -26,8 +26,9 @@ def _series(origin: str, name: str, contents=None, legend=rrb.Corner2D.LeftTop) 
     )
 
 
-def training_views(irl: bool = False) -> rrb.Tabs:
-    """Training curves in tabs: episodes, evaluations during training, (discriminator, learned reward), all."""
+def training_views(irl: bool = False, warm: bool = False) -> rrb.Tabs:
+    """Training curves in tabs: episodes, evaluations during training, (discriminator, learned reward), (the warm
+    start's rounds), all."""
     tabs = [
         _series("/metrics/train/episode", "training episodes"),
         _series("/metrics/train/eval", "evaluation during training"),
@@ -37,6 +38,8 @@ def training_views(irl: bool = False) -> rrb.Tabs:
             _series("/metrics/train/irl", "discriminator", ["+ $origin/disc_accuracy", "+ $origin/disc_loss"]),
             _series("/metrics/train/irl", "learned reward", ["+ $origin/reward_expert", "+ $origin/reward_policy"]),
         ]
+    if warm:
+        tabs.append(_series("/metrics/warm_start", "warm start (DAgger rounds)"))
     tabs.append(_series("/metrics/train", "all curves"))
     return rrb.Tabs(*tabs, active_tab=2 if irl else 0)
 
@@ -49,6 +52,7 @@ def run_blueprint(
     irl: bool = False,
     curves: bool = True,
     pixels: bool = False,
+    warm: bool = False,
 ) -> rrb.Blueprint:
     """3D scene + episode `focus`, its endoscope image and reward features, training, summary.
 
@@ -61,7 +65,7 @@ def run_blueprint(
     eye_controls = None
     if eye is not None:
         eye_controls = rrb.EyeControls3D(position=eye[0], look_target=eye[1], eye_up=(0.0, 0.0, 1.0))
-    training = training_views(irl)
+    training = training_views(irl, warm)
     summary = rrb.TextDocumentView(origin="/summary", name="summary")
     if n_episodes <= 0:
         scene = rrb.Spatial3DView(

@@ -56,6 +56,7 @@ class RunRecorder:
         if run_name:
             self.rec.send_recording_name(run_name)
         self.curves = TrainingCurves(self.rec)
+        self.warm = TrainingCurves(self.rec, root="metrics/warm_start")
         self.closed = False
         self.eye: tuple | None = None
 
@@ -89,6 +90,10 @@ class RunRecorder:
         """One row of training metrics at `timesteps` (metrics/train/<name>); NaN/None skipped."""
         self.curves.row(timesteps, metrics)
 
+    def log_warm_start(self, steps: int, metrics: dict[str, float]) -> None:
+        """One round of a warm start (metrics/warm_start/<name>) at the labelled steps so far."""
+        self.warm.row(steps, metrics)
+
     def log_training_columns(self, timesteps: np.ndarray, metrics: dict[str, np.ndarray]) -> None:
         """Many rows of training metrics at once (e.g. a resumed run's history)."""
         self.curves.columns(timesteps, metrics)
@@ -101,9 +106,12 @@ class RunRecorder:
             static=True,
         )
 
-    def send_blueprint(self, n_episodes: int, irl: bool = False, curves: bool = True, pixels: bool = False) -> None:
-        """Send the layout the viewer opens with (scene + episode 0, image, the policy's frames, curves, summary)."""
-        blueprint = run_blueprint(n_episodes, eye=self.eye, irl=irl, curves=curves, pixels=pixels)
+    def send_blueprint(
+        self, n_episodes: int, irl: bool = False, curves: bool = True, pixels: bool = False, warm: bool = False
+    ) -> None:
+        """Send the layout the viewer opens with (scene + episode 0, image, the policy's frames, curves (the warm
+        start's rounds), summary)."""
+        blueprint = run_blueprint(n_episodes, eye=self.eye, irl=irl, curves=curves, pixels=pixels, warm=warm)
         self.rec.send_blueprint(blueprint, make_active=True, make_default=True)
 
     def flush(self) -> None:

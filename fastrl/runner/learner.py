@@ -44,6 +44,7 @@ class Learner:
     demos: list[Trajectory] = field(default_factory=list)
     averaging: RewardAveraging | None = None
     console: Console | None = None
+    anchor: BaseCallback | None = None  # a warm start's cloning steps after each PPO update (train.warm_start)
 
     @property
     def parts(self) -> dict:
@@ -70,7 +71,8 @@ class Learner:
                 self.console.print(f"generator: cloned from {len(self.demos)} demonstrations{matched}")
         if self.spec.irl.algorithm == "bc":
             return
-        self.model.learn(timesteps, callback=[*self.callbacks, monitor], reset_num_timesteps=False)
+        anchor = [self.anchor] if self.anchor is not None else []
+        self.model.learn(timesteps, callback=[*self.callbacks, *anchor, monitor], reset_num_timesteps=False)
 
     @cached_property
     def pairs(self) -> tuple:

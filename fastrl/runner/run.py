@@ -32,6 +32,7 @@ from .stops import (
     space_to_resume,
     stop_on_sigterm,
 )
+from .warm import warm_start_run
 
 __all__ = ["EvaluationInterrupted", "RunInterrupted", "RunOutOfSpace", "resume_run", "start_run"]
 
@@ -101,7 +102,8 @@ def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resumed_at: in
     recorder.log_scene(task)
     n = min(spec.evaluate.record_episodes, spec.evaluate.episodes)
     pixels = spec.observation.image is not None
-    recorder.send_blueprint(n, spec.irl.enabled, curves=spec.irl.algorithm != "bc", pixels=pixels)  # BC: no curves
+    warm = spec.train.warm_start is not None
+    recorder.send_blueprint(n, spec.irl.enabled, curves=spec.irl.algorithm != "bc", pixels=pixels, warm=warm)
     if resumed_at is not None:
         history = metrics_until(run / "metrics.jsonl", resumed_at)
         if history:
@@ -202,6 +204,8 @@ def _stages(
     remaining = spec.train.timesteps - model.num_timesteps
     t0 = time.perf_counter()
     try:
+        if remaining > 0 and model.num_timesteps == 0 and spec.train.warm_start is not None:
+            warm_start_run(run, spec, learner, recorder, console)  # its time counts in train_seconds
         if remaining > 0:
             learner.learn(remaining, monitor)
     except DiskFull:

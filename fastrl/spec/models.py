@@ -201,6 +201,8 @@ class TaskSpec(Strict):
                 f"{kind.name} needs continuous actions: set actions.mode: rates (`--set actions.mode=rates`: "
                 "portal rates, where the shipped SAC settings learn) or continuous (tip accelerations)",
             )
+        if self.train.warm_start is not None and (kind.off_policy or self.irl.enabled):
+            _fail("train.warm_start", "the warm start is for PPO on the spec's reward: train.algo: PPO, irl off")
         if self.irl.algorithm == "bc" and kind.off_policy:
             _fail("irl.algorithm", "behavioural cloning trains the PPO policy: set train.algo: PPO")
         image = self.observation.image

@@ -86,6 +86,36 @@ class Encoder(Strict):
     shift: int = Field(
         4, ge=0, le=16, description="pixels each frame moves at random in gradient steps (DrQ; 0: no augmentation)"
     )
+    critic_cnn: bool = Field(
+        False,
+        description="the value function reads the frames through a CNN of its own (false: the policy's), so its "
+        "loss cannot move a warm-started policy's features",
+    )
+
+
+class WarmStart(Strict):
+    """Before PPO's first step: clone the scripted expert's episodes into the policy, then DAgger rounds in which
+    the expert labels the states the policy itself visits (from the kinematic state the env computes anyway)."""
+
+    demonstrations: int = Field(40, ge=1, description="scripted-expert episodes cloned first")
+    rounds: int = Field(4, ge=0, description="DAgger rounds after the clone (0: behavioural cloning alone)")
+    episodes: int = Field(8, ge=1, description="the policy's episodes per round, every step labelled by the expert")
+    expert_share: float = Field(
+        0.5,
+        ge=0,
+        le=1,
+        description="in round k the expert's action is taken at this ** k of the steps (DAgger's beta), so the "
+        "early rounds still reach the later subtasks",
+    )
+    epochs: int = Field(25, ge=1, description="passes over all the labelled data after each round")
+    batch_size: int = Field(256, ge=2)
+    learning_rate: float = Field(1e-3, gt=0)
+    anchor: int = Field(
+        0,
+        ge=0,
+        description="minibatches of cloning on all the labelled data after every PPO update (as DAPG), so PPO "
+        "improves on the clone without leaving it; 0: none",
+    )
 
 
 class Train(Strict):
@@ -105,6 +135,11 @@ class Train(Strict):
     ppo: PPOParams = PPOParams()
     sac: SACParams = SACParams()
     encoder: Encoder | None = Field(None, description="observation.image's CNN (null: its defaults)")
+    warm_start: WarmStart | None = Field(
+        None,
+        description="PPO from the spec's reward, starting from the scripted expert's clone refined by DAgger (null: "
+        "from scratch); episode seeds from 100,000 x train.seed",
+    )
     normalize: Normalize = Normalize()
     checkpoint_every: int = Field(100_000, ge=1, description="timesteps between checkpoints")
     log_every: int = Field(10_000, ge=1, description="timesteps between training-curve points")

@@ -94,7 +94,7 @@ def test_pixel_sac_learns_a_few_steps_and_its_buffer_is_bounded():
     from fastrl.agents.sb3 import build_model, make_vec_env
     from fastrl.spec import SpecError
 
-    base = ["train.algo=SAC", "actions.mode=rates", "observation.image.size=32"]
+    base = ["train.algo=SAC", "actions.mode=rates", "observation.image.size=32", "train.warm_start=null"]
     try:
         load_spec(PIXELS, base)  # 300k frames of 32 x 32 x 6, twice: 3.7 GB, under the limit
         load_spec(PIXELS, [*base, "observation.image.size=48"])
@@ -118,6 +118,7 @@ def test_behaviour_cloning_fits_a_pixel_policy_to_expert_frames(tmp_path):
         str(PIXELS),
         *[a for kv in TINY for a in ("--set", kv)],
         *("--set", "irl.algorithm=bc", "--set", "irl.demonstrations.expert=2", "--set", "irl.bc.epochs=3"),
+        *("--set", "train.warm_start=null"),
     ]
     res = CliRunner().invoke(app, [*args, "--runs", str(tmp_path), "--no-progress"])
     assert res.exit_code == 0, res.output
@@ -168,3 +169,50 @@ def test_image_workers_start_fresh_after_this_process_rendered():
         signal.signal(signal.SIGALRM, old)
         venv.close()
     assert obs.shape == (4, 32, 32, 6) and obs[2:].std() > 0  # the worker's envs rendered
+
+
+def test_warm_started_pixel_run_logs_its_dagger_rounds(tmp_path):
+    warm = ["demonstrations=2", "rounds=2", "episodes=1", "epochs=2", "batch_size=64"]
+    args = ["run", str(PIXELS), "--timesteps", "256", *[a for kv in TINY for a in ("--set", kv)]]
+    args += [a for kv in warm for a in ("--set", f"train.warm_start.{kv}")]
+    res = CliRunner().invoke(app, [*args, "--runs", str(tmp_path), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert "DAgger round 2" in res.output
+    run = only_run(tmp_path)
+    rows = [json.loads(line) for line in (run / "warm_start.jsonl").read_text().splitlines()]
+    assert [r["dagger_round"] for r in rows] == [0, 1, 2]
+    assert rows[0]["dagger_subtasks"] > 0  # the expert's own episodes (3 s long here) complete some subtasks
+    pairs = [r["dagger_pairs"] for r in rows]
+    assert pairs == sorted(pairs) and pairs[0] < pairs[1] and all(np.isfinite(r["dagger_loss"]) for r in rows)
+    meta = json.loads((run / "meta.json").read_text())
+    assert meta["status"] == "done" and meta["warm_start"]["pairs"] == pairs[-1]
+    assert "1 file verified" in rrd_verify(run / "recording.rrd")
+    entities, _ = recorded(run / "recording.rrd")
+    assert {"/metrics/warm_start/dagger_loss", "/metrics/warm_start/dagger_subtasks"} <= entities
+
+
+def test_warm_start_is_for_ppo_on_the_specs_reward():
+    from fastrl.spec import SpecError
+
+    for overrides in (["train.algo=SAC", "actions.mode=rates"], ["irl.algorithm=bc"]):
+        with pytest.raises(SpecError, match="train.warm_start: the warm start is for PPO"):
+            load_spec(PIXELS, overrides)
+
+
+def test_dagger_labels_the_policys_states_with_the_experts_actions():
+    from fastrl.agents.dagger import labelled_episodes
+    from fastrl.agents.expert import ScriptedExpert
+
+    spec = load_spec(PIXELS, ["observation.image.size=32", "episode.time_limit=2"])
+    env = FastEnv(spec)
+    expert = ScriptedExpert(env)
+    led = labelled_episodes(env, expert, [5])
+    still = labelled_episodes(env, expert, [5], act=lambda obs: 0)  # a policy that never moves
+    assert len(still.labels) == 40 and still.subtasks == 0.0 and still.obs.shape == (40, 32, 32, 6)
+    assert (still.labels != 0).all()  # the expert would move it
+    assert np.array_equal(still.obs[0], led.obs[0]) and still.labels[0] == led.labels[0]
+    assert not np.array_equal(still.obs[5], led.obs[5])  # the expert's episode moved on
+    always = labelled_episodes(env, expert, [5], act=lambda obs: 0, expert_share=1.0)
+    assert np.array_equal(always.obs, led.obs) and np.array_equal(always.labels, led.labels)
+    half = labelled_episodes(env, expert, [5], act=lambda obs: 0, expert_share=0.5)
+    assert not np.array_equal(half.obs[5:10], led.obs[5:10]) and not np.array_equal(half.obs[5:10], still.obs[5:10])
