@@ -64,6 +64,7 @@ def test_encoder_shifts_only_in_training_and_keeps_the_state():
 
 def test_pixel_ppo_run_end_to_end_with_the_policys_frames_recorded(tmp_path):
     args = ["run", str(PIXELS), "--timesteps", "256", *[a for kv in TINY for a in ("--set", kv)]]
+    args += ["--set", "train.warm_start=null"]  # the shipped warm start takes minutes; it has its own test below
     res = CliRunner().invoke(app, [*args, "--runs", str(tmp_path), "--no-progress"])
     assert res.exit_code == 0, res.output
     run = only_run(tmp_path)
