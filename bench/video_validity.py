@@ -97,12 +97,13 @@ def taus(report: dict, labels: dict[str, int]) -> dict:
 
 
 def protocol(inputs: Path, task: str, seed: int, root: Path):
-    """`fastrl assess INPUTS --top 10 --by time`, quiet."""
+    """`fastrl assess INPUTS --top 10 --by time`, quiet; (what it did, seconds)."""
     from rich.console import Console
 
     from fastrl.runner.protocol import run_protocol
 
-    return run_protocol(
+    t0 = time.perf_counter()
+    done = run_protocol(
         [inputs],
         Path(f"specs/{task}.yaml"),
         top=10,
@@ -113,6 +114,7 @@ def protocol(inputs: Path, task: str, seed: int, root: Path):
         progress=False,
         pictures=False,
     )
+    return done, time.perf_counter() - t0
 
 
 def score(run: Path, inputs: Path, output: Path):
@@ -165,32 +167,14 @@ def main() -> None:
         folder = cohort(args.task, family, args.root)
         labels = {f.stem: Trajectory.load(f).meta["skill"] for f in folder.glob("*.npz")}
         mp4 = videos(folder, base / "videos")
-        t0 = time.perf_counter()
-        done = protocol(mp4, args.task, args.seed, base / "runs")
-        keep(
-            {
-                "family": family,
-                "input": "video",
-                "tau_b": taus(done.assessment.report, labels),
-                "seconds": time.perf_counter() - t0,
-                "run": str(done.run),
-            }
-        )
-        if not args.skip_kinematic:
-            t0 = time.perf_counter()
-            kin = protocol(folder, args.task, args.seed, base / "runs")
-            keep(
-                {
-                    "family": family,
-                    "input": "kinematic",
-                    "tau_b": taus(kin.assessment.report, labels),
-                    "seconds": time.perf_counter() - t0,
-                    "run": str(kin.run),
-                }
-            )
+        learned_from, done = {"video": mp4, **({} if args.skip_kinematic else {"kinematic": folder})}, {}
+        for name, inputs in learned_from.items():
+            done[name], secs = protocol(inputs, args.task, args.seed, base / "runs")
+            taus_b = taus(done[name].assessment.report, labels)
+            keep({"family": family, "input": name, "tau_b": taus_b, "seconds": secs, "run": str(done[name].run)})
         if args.skip_reencode:
             continue
-        learned = done.learned[0]
+        learned = done["video"].learned[0]
         report, secs = score(learned, mp4, base / "scores" / "original" / "scores.json")
         keep({"family": family, "input": "video, scored again", "tau_b": taus(report, labels), "seconds": secs})
         for name, how in REENCODES.items():

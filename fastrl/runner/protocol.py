@@ -143,10 +143,11 @@ def run_protocol(
     if seeds < 1:
         raise ValueError(f"--seeds must be at least 1, got {seeds}")
     spec = load_spec(spec_path, overrides)
+    run, skipped = None, []
     if video_files(inputs)[0]:  # poses read off videos are coarser: the cue's centring tolerance widens with them
         overrides = [*overrides, *video_overrides(spec)]
         spec = load_spec(spec_path, overrides)
-    run, inputs, skipped = _from_videos(inputs, spec, root, algorithm, console, progress)
+        run, inputs, skipped = _from_videos(inputs, spec, root, algorithm, console, progress)
     ranked, unusable = rank_recordings(spec, inputs, by, top)
     skipped += unusable
     if not ranked:
@@ -244,10 +245,8 @@ def assess_seeds(
 
 
 def _from_videos(inputs, spec, root: Path, algorithm: str, console: Console, progress: bool):
-    """(the run folder or None, the inputs, skipped videos): with videos among the inputs, the run starts here and
-    holds their estimated trajectories (from_video/) and the pose estimator that read them."""
-    if not video_files(inputs)[0]:
-        return None, list(inputs), []
+    """(the run folder, the inputs, skipped videos): the run starts here and holds the videos' estimated trajectories
+    (from_video/) and the pose estimator that read them."""
     run = new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
     inputs, batch, source = videos_as_trajectories(inputs, spec, run / "from_video", console=console, progress=progress)
     shutil.copy2(source, run / source.name)  # `fastrl score --run RUN/learned VIDEOS` reads with the same estimator
