@@ -60,7 +60,7 @@ def with_overlays(env: FastEnv, traj: Trajectory, severities: dict[str, float], 
     """The trajectory's scope motion deformed by kinematic overlays, on the control grid, without its actions (they
     no longer match); ValueError for a task with instruments or loose bodies (overlays deform the scope alone)."""
     if traj.instruments is not None or traj.bodies is not None:
-        raise ValueError("kinematic overlay families (slowed, jitter, drift) deform the scope alone: not for this task")
+        raise ValueError("kinematic overlay families deform the scope alone: not for this task")
     hz = env.task_spec.episode.control_hz
     portal = overlaid(traj.portal, severities, seed, hz, env.task.ranges)
     meta = {**traj.meta, "overlays": severities}

@@ -1,5 +1,5 @@
 """Families of trainee deficits, named for what raters grade: most a direction in SkillProfile space at novice
-severity (how the trainee acts), three a kinematic overlay on what was recorded (fastrl.data.overlays); a subject
+severity (how the trainee acts), five a kinematic overlay on what was recorded (fastrl.data.overlays); a subject
 mixes the families of its cohort, the level setting the total severity."""
 
 from __future__ import annotations
@@ -49,6 +49,12 @@ FAMILIES = {
     "slowed": Family(SkillProfile(), "OSATS time and motion: the same path at a slower, wandering speed", "slowed"),
     "jitter": Family(SkillProfile(), "steadiness (tremor): 3-8 Hz shake on the recorded motion", "jitter"),
     "drift": Family(SkillProfile(), "ASSET field of view: the view drifts slowly off, corrected late", "drift"),
+    "paused": Family(
+        SkillProfile(), "ASSET flow of procedure: stops mid-motion on the recording, then goes on", "paused"
+    ),
+    "retraced": Family(
+        SkillProfile(), "GOALS efficiency: stretches of path undone and done again (lost, then found)", "retraced"
+    ),
 }
 
 

@@ -1,4 +1,5 @@
-"""Kinematic deficits laid over a recorded trajectory (not acted): slowed playback, tremor, drift of the view.
+"""Kinematic deficits laid over a recorded trajectory (not acted): slowed playback, tremor, drift of the view,
+pauses, and going back over the path already covered.
 
 Where a family of fastrl.data.families deviates in how a trainee acts, these deform what was recorded, as a person
 who builds a cohort from recordings would; replay then decides what the deformed motion achieves. Each takes a
@@ -12,6 +13,9 @@ JITTER_HZ = (3.0, 8.0)  # physiological tremor band
 JITTER = np.array([0.8, 0.8, 0.0015, 2.0, 0.0])  # rms at g = 1: pitch, yaw (deg), insertion (m), roll (deg), cable
 DRIFT = np.array([3.0, 3.0, 0.008, 8.0, 0.0])  # rms of the slow drift at g = 1, same units
 DRIFT_S = 1.5  # correlation time of the drift (s)
+PAUSED = 0.5  # at g = 1 the holds add half the recording's duration
+RETRACED = 0.3  # at g = 1 the stretches gone back over sum to 0.3 of it (each twice: undone, then done again)
+EVENT_S = 4.0  # one pause or retraced stretch per 4 s of recording at g = 1, and at least one
 DEG = np.array([np.pi / 180, np.pi / 180, 1.0, np.pi / 180, np.pi / 180])  # units above to portal units
 
 
@@ -57,7 +61,39 @@ def drifted(portal: np.ndarray, g: float, rng: np.random.Generator, hz: float) -
     return portal + g * x * DRIFT * DEG
 
 
-OVERLAYS = {"slowed": slowed, "jitter": jittered, "drift": drifted}
+def _events(n: int, g: float, share: float, hz: float, rng: np.random.Generator) -> list[tuple[int, int]]:
+    """(sample, length in samples) of the events of a g-severe overlay: at least one, about one per EVENT_S / g
+    seconds, at random moments, their lengths random shares of g * share of the recording."""
+    k = 1 + rng.poisson(g * n / hz / EVENT_S)
+    moments = np.sort(rng.integers(1, max(n, 2), k))
+    lengths = np.round(rng.dirichlet(np.ones(k)) * g * share * n).astype(int)
+    return list(zip(moments.tolist(), lengths.tolist()))
+
+
+def paused(portal: np.ndarray, g: float, rng: np.random.Generator, hz: float) -> np.ndarray:
+    """Stops mid-motion: at random moments the scope is held still, in all for g / 2 of the recording's duration."""
+    if g <= 0:
+        return portal
+    pieces, last = [], 0
+    for t, hold in _events(len(portal), g, PAUSED, hz, rng):
+        pieces += [portal[last:t], np.repeat(portal[t - 1 : t], hold, axis=0)]
+        last = t
+    return np.concatenate([*pieces, portal[last:]])
+
+
+def retraced(portal: np.ndarray, g: float, rng: np.random.Generator, hz: float) -> np.ndarray:
+    """Going back over the path: at random moments the motion just made is undone and then done again."""
+    if g <= 0:
+        return portal
+    pieces, last = [], 0
+    for t, back in _events(len(portal), g, RETRACED, hz, rng):
+        stretch = portal[max(t - back, last) : t]
+        pieces += [portal[last:t], stretch[::-1], stretch]
+        last = t
+    return np.concatenate([*pieces, portal[last:]])
+
+
+OVERLAYS = {"slowed": slowed, "jitter": jittered, "drift": drifted, "paused": paused, "retraced": retraced}
 
 
 def overlaid(portal: np.ndarray, severities: dict[str, float], seed: int, hz: float, ranges: np.ndarray) -> np.ndarray:

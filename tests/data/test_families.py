@@ -85,7 +85,7 @@ PRESENT = {
 
 
 def test_every_family_has_its_sign():
-    assert set(PRESENT) == set(ACTED) and set(OVERLAID) == {"slowed", "jitter", "drift"}
+    assert set(PRESENT) == set(ACTED) and set(OVERLAID) == {"slowed", "jitter", "drift", "paused", "retraced"}
 
 
 @pytest.mark.parametrize("family", ACTED)
@@ -122,6 +122,15 @@ def test_kinematic_overlay_deforms_the_recording_as_named(family):
             gap = n.portal[:, :2] - e.portal[:, :2]
             assert np.sqrt((gap**2).mean()) > np.radians(0.5)
             assert band_power(gap, hz, 3, 8) > 10 * band_power(gap, hz, 0, 2)
+        elif family == "paused":  # the same samples in the same order, with still stretches between them
+            moving = n.portal[np.r_[True, np.abs(np.diff(n.portal, axis=0)).max(1) > 0]]
+            assert np.array_equal(moving, e.portal[np.r_[True, np.abs(np.diff(e.portal, axis=0)).max(1) > 0]])
+            still = np.abs(np.diff(n.portal, axis=0)).max(1) == 0
+            assert still.sum() - (np.abs(np.diff(e.portal, axis=0)).max(1) == 0).sum() >= 0.4 * hz
+        elif family == "retraced":  # recorded poses only, gone over again: a longer path to the same end
+            assert np.isin(n.portal.view([("", n.portal.dtype)] * 5), e.portal.view([("", e.portal.dtype)] * 5)).all()
+            assert scorer.score(n).scores["path_length"] > 1.1 * scorer.score(e).scores["path_length"]
+            np.testing.assert_allclose(n.portal[-1], e.portal[-1])
         else:  # drift: slow deviations from the recorded path, not a shake
             gap = n.portal[:, :2] - e.portal[:, :2]
             assert np.sqrt((gap**2).mean()) > np.radians(1.0)
