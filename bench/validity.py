@@ -45,11 +45,21 @@ def cohort(task: str, family: str, root: Path) -> Path:
     if len(files) == 50 and Trajectory.load(files[0]).meta.get("task_hash") == task_hash(spec):
         return out
     out.mkdir(parents=True, exist_ok=True)
-    families = tuple(FAMILIES) if family == "mixed" else (family,)
+    families = tuple(f for f in FAMILIES if not FAMILIES[f].overlay) if family == "mixed" else (family,)
     for traj in make_cohort(spec, 5, 10, seed=0, families=families):
         bare = Trajectory(traj.time, traj.portal, traj.meta, instruments=traj.instruments, bodies=traj.bodies)
         bare.save(out / f"{traj.meta['subject']}.npz")
     return out
+
+
+def left_out(family: str, degrade: list[str] | None) -> list[str]:
+    """The --set of the ranking's degraded copies without the family's own overlay (leave one family out)."""
+    from fastrl.data.families import FAMILIES
+
+    if degrade is None:
+        return []
+    own = FAMILIES[family].overlay if family in FAMILIES else None
+    return [f"irl.discriminator.ranking_degraded=[{', '.join(d for d in degrade if d != own)}]"]
 
 
 def measure(task: str, family: str, seed: int, root: Path, sets: tuple[str, ...] = ()) -> dict:
@@ -72,7 +82,14 @@ def measure(task: str, family: str, seed: int, root: Path, sets: tuple[str, ...]
     )
     ranking = done.assessment.report["ranking"]
     taus = {k: ranking[k]["kendall_tau_b"] for k in SCORES if k in ranking}
-    return {"task": task, "family": family, "seed": seed, "tau_b": taus, "seconds": time.perf_counter() - t0}
+    return {
+        "task": task,
+        "family": family,
+        "seed": seed,
+        "sets": list(sets),
+        "tau_b": taus,
+        "seconds": time.perf_counter() - t0,
+    }
 
 
 def table(rows: list[dict]) -> str:
@@ -102,6 +119,11 @@ def main() -> None:
     parser.add_argument("--seeds", nargs="+", type=int, default=[0])
     parser.add_argument("--root", type=Path, default=ROOT)
     parser.add_argument("--set", dest="sets", action="append", default=[], help="spec change, as fastrl's --set")
+    parser.add_argument(
+        "--degrade",
+        nargs="*",
+        help="the ranking's degraded copies carry these overlays, less the scored family's own (leave-one-family-out)",
+    )
     parser.add_argument("--json", type=Path, default=Path("docs/validity.json"))
     parser.add_argument("--from-json", type=Path, help="print the table of an earlier run and stop")
     args = parser.parse_args()
@@ -117,7 +139,8 @@ def main() -> None:
     for task in args.tasks:
         for family in args.families:
             for seed in args.seeds:
-                rows.append(measure(task, family, seed, args.root, tuple(args.sets)))
+                sets = (*args.sets, *left_out(family, args.degrade))
+                rows.append(measure(task, family, seed, args.root, sets))
                 t = rows[-1]["tau_b"]
                 print(
                     f"{task} {family} s{seed}: " + ", ".join(f"{k} {t[k]:.2f}" for k in t if t[k] is not None),

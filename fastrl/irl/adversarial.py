@@ -7,7 +7,7 @@ import torch
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
 
-from .discriminator import Discriminator, augment
+from .discriminator import augment
 from .fitting import DiscriminatorFit, Transitions, make_batch
 from .generator import current_original_obs, normalize_obs, original_obs, transitions_batch
 from .history import PolicyHistory
@@ -16,7 +16,7 @@ from .scaling import ReturnScale
 
 
 class AdversarialCallback(BaseCallback):
-    """After each PPO rollout: fit the discriminator (expert vs policy) and replace the rollout's rewards.
+    """After each PPO rollout: fit the discriminator (expert vs policy, by `fit`) and replace the rollout's rewards.
 
     With `history` > 0, each fit's policy side is the rollout plus as many transitions drawn from a reservoir of
     that many earlier ones (raw observations, normalised and scored under the current policy when drawn).
@@ -26,22 +26,18 @@ class AdversarialCallback(BaseCallback):
 
     def __init__(
         self,
-        disc: Discriminator,
+        fit: DiscriminatorFit,
         expert: Transitions,
         *,
         epochs: int = 2,
-        batch_size: int = 256,
-        lr: float = 3e-4,
         seed: int = 0,
         history: int = 0,
         scale_reward: bool = False,
-        gradient_penalty: float = 0.0,
         ranked: RankedRollouts | None = None,
         ranking_weight: float = 0.0,
     ):
         super().__init__()
-        self.disc, self.expert, self.n_epochs = disc, expert, epochs
-        self.fit = DiscriminatorFit(disc, lr=lr, batch_size=batch_size, seed=seed, gradient_penalty=gradient_penalty)
+        self.fit, self.disc, self.expert, self.n_epochs = fit, fit.disc, expert, epochs
         self.history = PolicyHistory(history, seed) if history else None
         self.scale_reward = scale_reward
         self.scale: ReturnScale | None = None

@@ -17,7 +17,7 @@ from stable_baselines3.common.buffers import ReplayBuffer
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.type_aliases import ReplayBufferSamples
 
-from .discriminator import Discriminator, augment
+from .discriminator import augment
 from .fitting import DiscriminatorFit, Transitions, make_batch
 from .generator import log_prob, normalize_obs, transitions_batch
 
@@ -45,21 +45,17 @@ class OffPolicyAdversarialCallback(BaseCallback):
 
     def __init__(
         self,
-        disc: Discriminator,
+        fit: DiscriminatorFit,
         expert: Transitions,
         *,
         current_rollout: bool = True,
         steps: int = 4,
-        batch_size: int = 256,
-        lr: float = 3e-4,
-        seed: int = 0,
         every: int = 0,
-        gradient_penalty: float = 0.0,
     ):
         super().__init__()
-        self.disc, self.expert, self.current_rollout, self.n_steps = disc, expert, current_rollout, steps
+        self.fit, self.disc, self.expert = fit, fit.disc, expert
+        self.current_rollout, self.n_steps = current_rollout, steps
         self.every, self.last_fit = every, 0
-        self.fit = DiscriminatorFit(disc, lr=lr, batch_size=batch_size, seed=seed, gradient_penalty=gradient_penalty)
         self.stats: dict[str, float] = {}
         self.last_policy_rows: tuple[np.ndarray, np.ndarray] | None = None
 

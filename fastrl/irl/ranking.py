@@ -18,6 +18,7 @@ from ..agents.expert import ScriptedExpert
 from ..data.overlays import overlaid
 from ..data.replay import replay, rollout_trajectory
 from ..data.trajectory import Trajectory
+from ..spec.irl import DiscriminatorSettings
 from .discriminator import Discriminator, absorbing_states, augment
 
 
@@ -75,38 +76,37 @@ def noisy_rollouts_batched(
     return [(np.array(t).astype(np.float32), e) for t, e in zip(traces, ended)]
 
 
-DEGRADE = ("drift", "jitter", "slowed")  # the kinematic overlays a recording's degraded copies carry, each at eps
-
-
-def degraded_recording(env, traj: Trajectory, eps: float, seed: int) -> tuple[np.ndarray, bool]:
-    """Raw observations of a recording whose motion drifts, shakes and slows by `eps` (0: as recorded), replayed;
-    and whether it still completed the task."""
+def degraded_recording(
+    env, traj: Trajectory, eps: float, seed: int, overlays: tuple[str, ...]
+) -> tuple[np.ndarray, bool]:
+    """Raw observations of a recording with each of the kinematic `overlays` at severity `eps` (0: as recorded),
+    replayed; and whether it still completed the task."""
     u = env.unwrapped
     hz = u.task_spec.episode.control_hz
-    portal = overlaid(traj.portal, dict.fromkeys(DEGRADE, eps), seed, hz, u.task.ranges)
+    portal = overlaid(traj.portal, dict.fromkeys(overlays, eps), seed, hz, u.task.ranges)
     copy = Trajectory(traj.time[0] + np.arange(len(portal)) / hz, portal, traj.meta)
     obs, infos, _ = replay(env, copy)
     return obs.astype(np.float32), bool(infos[-1]["success"])
 
 
 class RankedRollouts:
-    """Noisy rollouts of the scripted expert (or `actor`), and with `recordings` degraded copies of them, padded to
-    one length; their noise, and r_psi's ranking loss over pairs of the same source. With `envs` (one per rollout)
-    an actor with `act_batch(observations)` rolls out in lockstep."""
+    """Noisy rollouts of the scripted expert (or `actor`), and degraded copies of `recordings`, as the ranking
+    `settings` ask, padded to one length; their noise, and r_psi's ranking loss over pairs of the same source. With
+    `envs` (one per rollout) an actor with `act_batch(observations)` rolls out in lockstep."""
 
     def __init__(
         self,
         env,
-        noise: list[float],
-        episodes: int,
+        settings: DiscriminatorSettings,
         *,
         seed: int = 50000,
         snippet: int = 50,
-        repeat: int = 1,
         actor=None,
         recordings: list[Trajectory] = (),
         envs: list = (),
     ):
+        noise, episodes, repeat = settings.ranking_noise, settings.ranking_episodes, settings.ranking_repeat
+        degrade = settings.degraded_overlays
         expert = ScriptedExpert(env) if actor is None else actor  # actor: act(obs) and reset(), e.g. a cloned policy
         jobs = [(eps, seed + 1000 * i + k) for i, eps in enumerate(noise) for k in range(episodes)]
         if envs and hasattr(expert, "act_batch"):  # a stateless policy: all rollouts in lockstep
@@ -115,8 +115,9 @@ class RankedRollouts:
             runs = [noisy_expert_rollout(env, expert, eps, s, repeat) for eps, s in jobs]
         self.noise = np.repeat(np.asarray(noise, float), episodes)
         self.source = np.zeros(len(runs), int)
-        copies = [(eps, r) for eps in noise for r in recordings if r.portal is not None and r.instruments is None]
-        runs += [degraded_recording(env, r, eps, seed + k) for k, (eps, r) in enumerate(copies)]
+        usable = [r for r in recordings if r.portal is not None and r.instruments is None] if degrade else []
+        copies = [(eps, r) for eps in noise for r in usable]
+        runs += [degraded_recording(env, r, eps, seed + k, degrade) for k, (eps, r) in enumerate(copies)]
         self.noise = np.concatenate([self.noise, [eps for eps, _ in copies]])
         self.source = np.concatenate([self.source, np.ones(len(copies), int)])
         self.snippet = snippet

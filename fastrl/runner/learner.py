@@ -23,6 +23,7 @@ from ..env.fast_env import FastEnv
 from ..irl import AdversarialCallback, Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
 from ..irl.averaging import RewardAveraging
 from ..irl.demonstrations import expert_transitions
+from ..irl.fitting import DiscriminatorFit
 from ..irl.ranking import RankedRollouts
 from ..model.scope import joint_ranges
 from ..spec.columns import discriminator_inputs, reward_inputs
@@ -184,38 +185,28 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
         actor = None if irl.demonstrations.path is None else cloned_actor(spec, demos)  # D-REX: no expert
         ranked = RankedRollouts(
             env,
-            d.ranking_noise,
-            d.ranking_episodes,
-            repeat=d.ranking_repeat,
+            d,
             actor=actor,
-            recordings=demos if d.ranking_degraded else (),
+            recordings=demos,
             envs=[] if actor is None else [FastEnv(spec) for _ in range(len(d.ranking_noise) * d.ranking_episodes)],
         )
     elif d.ranking and irl.algorithm == "airl":  # GAIL has no r_psi to rank, so it goes without a word
         console.print(
             "[dim]irl.discriminator.ranking: the ranking prior is for shaped AIRL on PPO; this run goes without it[/]"
         )
+    fit = DiscriminatorFit(disc, lr=d.learning_rate, seed=spec.train.seed, gradient_penalty=d.gradient_penalty)
     if off_policy:
         cb = OffPolicyAdversarialCallback(
-            disc,
-            transitions,
-            current_rollout=d.current_rollout,
-            steps=d.steps,
-            lr=d.learning_rate,
-            seed=spec.train.seed,
-            every=d.every,
-            gradient_penalty=d.gradient_penalty,
+            fit, transitions, current_rollout=d.current_rollout, steps=d.steps, every=d.every
         )
     else:
         cb = AdversarialCallback(
-            disc,
+            fit,
             transitions,
             epochs=d.epochs,
-            lr=d.learning_rate,
             seed=spec.train.seed,
             history=d.history,
             scale_reward=d.scale_reward,
-            gradient_penalty=d.gradient_penalty,
             ranked=ranked,
             ranking_weight=d.ranking,
         )

@@ -9,6 +9,9 @@ from pydantic import Field
 from .base import Strict
 from .training import PPOParams, Train
 
+Degradation = Literal["slowed", "jitter", "drift", "paused", "retraced"]  # fastrl.data.overlays.OVERLAYS
+DEGRADED_DEFAULT = ("drift", "jitter", "slowed")  # what `ranking_degraded: true` lays on the copies
+
 
 class Demonstrations(Strict):
     """Where demonstrations come from: a directory of trajectory files, or the scripted expert."""
@@ -74,10 +77,10 @@ class DiscriminatorSettings(Strict):
     )
     ranking_episodes: int = Field(4, ge=1, description="ranking rollouts per noise rate")
     ranking_repeat: int = Field(1, ge=1, description="steps each random action of the ranking rollouts is held")
-    ranking_degraded: bool = Field(
+    ranking_degraded: bool | list[Degradation] = Field(
         False,
-        description="also rank copies of the demonstrations degraded at each `ranking_noise` rate (drift, tremor, "
-        "slowed motion: fastrl.data.overlays), pairs of the same source only",
+        description="also rank copies of the demonstrations degraded at each `ranking_noise` rate by these "
+        "kinematic overlays (fastrl.data.overlays), pairs of the same source only; true: drift, jitter, slowed",
     )
     average_every: int = Field(
         50000,
@@ -100,6 +103,11 @@ class DiscriminatorSettings(Strict):
         "the critic's targets stay in range as the discriminator sharpens. null: "
         "resolved when the spec is loaded, on for AIRL (3-5x fewer steps), off for GAIL (measured slower)",
     )
+
+    @property
+    def degraded_overlays(self) -> tuple[str, ...]:
+        """The overlays the ranking's degraded copies of the demonstrations carry (none: no copies)."""
+        return DEGRADED_DEFAULT if self.ranking_degraded is True else tuple(self.ranking_degraded or ())
 
 
 class Generator(Strict):

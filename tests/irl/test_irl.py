@@ -17,6 +17,7 @@ from fastrl.irl.ranking import RankedRollouts, noisy_expert_rollout, noisy_rollo
 from fastrl.runner.cloned import ClonedActor
 from fastrl.spec import load_spec
 from fastrl.spec.columns import discriminator_inputs, reward_inputs
+from fastrl.spec.irl import DiscriminatorSettings
 
 from ..conftest import spec_file
 
@@ -28,6 +29,11 @@ TINY = [
     "train.ppo.n_epochs=1",
     "episode.time_limit=8",
 ]
+
+
+def ranking(noise: list[float], episodes: int, degraded: list[str] | bool = False) -> DiscriminatorSettings:
+    """Ranking-prior settings: rates, rollouts per rate, and the overlays of the recordings' degraded copies."""
+    return DiscriminatorSettings(ranking_noise=noise, ranking_episodes=episodes, ranking_degraded=degraded)
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +50,8 @@ def test_rollout_rewards_are_replaced_by_the_discriminator(expert_data, kind):
     venv = make_vec_env(spec, 2, 0)
     model = build_model(spec, venv)
     disc = Discriminator(venv.observation_space.shape[0], kind, 0.99)
-    cb = AdversarialCallback(disc, expert, epochs=1, batch_size=64, scale_reward=False)  # scaling: test_irl_scaling
+    fit = DiscriminatorFit(disc, batch_size=64)
+    cb = AdversarialCallback(fit, expert, epochs=1, scale_reward=False)  # scaling: test_irl_scaling
     before = [p.detach().clone() for p in disc.parameters()]
     model.learn(256, callback=cb)
     assert any(not torch.equal(a, b) for a, b in zip(before, disc.parameters()))
@@ -260,7 +267,7 @@ def test_noiseless_ranking_rollouts_are_the_experts_and_end_in_the_absorbing_sta
     expert_obs = expert_transitions(env, expert_trajectories(env, [7])).obs
     obs, ended = noisy_expert_rollout(env, ScriptedExpert(env), 0.0, 7)
     assert ended and np.allclose(obs[:-1], expert_obs, atol=1e-5)
-    ranked = RankedRollouts(env, [0.0, 1.0], 1, seed=7)
+    ranked = RankedRollouts(env, ranking([0.0, 1.0], 1), seed=7)
     s = ranked.states(lambda o: o)
     assert torch.equal(s[0, len(obs) :, -1], torch.ones(s.shape[1] - len(obs)))  # absorbed after the task is done
     assert torch.equal(s[0, len(obs) :, :-1], torch.zeros(s.shape[1] - len(obs), s.shape[2] - 1))
@@ -269,7 +276,7 @@ def test_noiseless_ranking_rollouts_are_the_experts_and_end_in_the_absorbing_sta
 
 def test_the_ranking_loss_teaches_r_psi_that_less_noise_is_better():
     spec = load_spec(spec_file("tracelines"), ["episode.time_limit=8"])
-    ranked = RankedRollouts(fastrl.make(spec), [0.0, 0.5, 1.0], 2, snippet=20)
+    ranked = RankedRollouts(fastrl.make(spec), ranking([0.0, 0.5, 1.0], 2), snippet=20)
     torch.manual_seed(0)
     disc = Discriminator(ranked.raw.shape[2], "airl", 0.99, hidden=(32, 32))
     states, rng = ranked.states(lambda o: o), np.random.default_rng(0)
@@ -311,8 +318,8 @@ def test_a_batch_actor_rolls_out_in_lockstep_exactly_as_one_at_a_time():
     for (a, end_a), (b, end_b) in zip(one, both):
         assert a.shape == b.shape and np.array_equal(a, b) and end_a == end_b
     assert not np.array_equal(one[0][0], one[2][0])  # the noise changed the rollout
-    ranked = RankedRollouts(env, noise, 1, seed=11, actor=actor, envs=[fastrl.make(spec) for _ in noise])
-    slow = RankedRollouts(env, noise, 1, seed=11, actor=actor)
+    ranked = RankedRollouts(env, ranking(noise, 1), seed=11, actor=actor, envs=[fastrl.make(spec) for _ in noise])
+    slow = RankedRollouts(env, ranking(noise, 1), seed=11, actor=actor)
     assert np.array_equal(ranked.raw, slow.raw) and np.array_equal(ranked.absorbed, slow.absorbed)
 
 
@@ -320,14 +327,14 @@ def test_degraded_copies_of_recordings_are_ranked_against_each_other_only():
     spec = load_spec(spec_file("tracelines"), ["episode.time_limit=8"])
     env = fastrl.make(spec)
     recordings = expert_trajectories(env, [1, 2])
-    ranked = RankedRollouts(env, [0.0, 0.5, 1.0], 1, snippet=20, recordings=recordings)
+    ranked = RankedRollouts(env, ranking([0.0, 0.5, 1.0], 1, ["drift", "paused"]), snippet=20, recordings=recordings)
     copies = ranked.source == 1
     assert copies.sum() == 6 and sorted(ranked.noise[copies]) == [0.0, 0.0, 0.5, 0.5, 1.0, 1.0]
     clean = np.flatnonzero(copies & (ranked.noise == 0.0))[0]
     expected = expert_transitions(env, recordings[:1]).obs
     assert np.allclose(ranked.raw[clean, : len(expected)], expected, atol=1e-5)  # eps 0: the recording as it was
     worst = np.flatnonzero(copies & (ranked.noise == 1.0))[0]
-    assert not np.allclose(ranked.raw[worst, : len(expected)], expected, atol=1e-3)  # drifted, shaken, slowed
+    assert not np.allclose(ranked.raw[worst, : len(expected)], expected, atol=1e-3)  # drifted and paused
     better, worse = ranked.pairs(np.random.default_rng(0), 400)
     assert len(better) > 50 and (ranked.source[better] == ranked.source[worse]).all()  # never across sources
     assert (ranked.noise[better] < ranked.noise[worse]).all()

@@ -7,7 +7,7 @@ import torch
 import fastrl
 from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.data.replay import expert_trajectories
-from fastrl.irl import Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
+from fastrl.irl import Discriminator, DiscriminatorFit, OffPolicyAdversarialCallback, RelabelingReplayBuffer
 from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.discriminator import augment
 from fastrl.spec import load_spec
@@ -42,7 +42,7 @@ def train(spec, expert, current_rollout: bool, spectral: bool = False, steps: in
     model = build_model(spec, venv, replay_buffer_class=RelabelingReplayBuffer)
     disc = Discriminator(venv.observation_space.shape[0], "airl", 0.99, hidden=(32, 32), spectral=spectral)
     cb = OffPolicyAdversarialCallback(
-        disc, expert, current_rollout=current_rollout, steps=2, batch_size=32, every=every
+        DiscriminatorFit(disc, batch_size=32), expert, current_rollout=current_rollout, steps=2, every=every
     )
     fit, cb.fits = cb.fit.steps, []
     cb.fit.steps = lambda policy, exp, n: cb.fits.append(model.num_timesteps) or fit(policy, exp, n)
