@@ -58,8 +58,8 @@ def record(
     """Record one attempt; returns what was written and the feedback. Saved every second and on any exit."""
     assistance = load_assistance(run, spec, seed=seed)
     path = attempt_path(out_dir, subject)
-    every = round(suggest_every * spec.episode.control_hz) if suggest_every else None
-    session = Session(spec, subject, path, seed=seed, assist=assistance, suggest_every=every)
+    assistance.suggest_every = round(suggest_every * spec.episode.control_hz) if suggest_every else None
+    session = Session(spec, subject, path, seed=seed, assist=assistance)
     session.writer.meta["task_spec"] = spec.model_dump(mode="json")
     display = None
     previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}

@@ -26,6 +26,7 @@ class Assistance:
     suggester: Suggester | None = None
     cue: ValueCue = field(default_factory=ValueCue)
     run: str | None = None
+    suggest_every: int | None = None  # control steps between path suggestions nobody asked for (None: only on request)
 
 
 class Session:
@@ -42,14 +43,13 @@ class Session:
         hold_s: float = 0.15,
         image_size: int = 128,
         spec_source: str | None = None,
-        suggest_every: int | None = None,
     ):
         if spec.actions.mode != "discrete":
             raise ValueError(
                 "recording drives the scope with discrete increments: use a spec with actions.mode: "
                 "discrete (or --set actions.mode=discrete)"
             )
-        self.spec, self.seed, self.hold, self.suggest_every = spec, seed, hold_s, suggest_every
+        self.spec, self.seed, self.hold = spec, seed, hold_s
         self.env = FastEnv(spec, width=image_size, height=image_size)
         self.assist = assist or Assistance()
         self.keys: deque = deque()
@@ -129,7 +129,8 @@ class Session:
         self.infos.append(info)
         self.writer.add(info["time"], self.env.portal_coordinates(), action, self._tools(), self.env.body_poses())
         self._cue()
-        if self.suggest_every and self.env.steps % self.suggest_every == 0:
+        every = self.assist.suggest_every
+        if every and self.env.steps % every == 0:
             self.want_suggestion = True
         if self.want_suggestion and self.assist.suggester is not None:
             self.suggest()
