@@ -53,7 +53,9 @@ def view_local(run_dir: Path) -> None:
         raise typer.Exit(code=2)
     viewer = shutil.which("rerun")
     if viewer and (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        subprocess.Popen([viewer, str(rrd)])
+        from ..log.video import viewer_env
+
+        subprocess.Popen([viewer, str(rrd)], env=viewer_env())
         out.print(f"opening {escape(str(rrd))} in the Rerun viewer")
         return
     out.print(

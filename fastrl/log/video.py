@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +11,29 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from ..atomic import fsync_dir
+from ..data.video_poses import cache_dir
 from .assessment import skip_pandas_probe
+
+
+def viewer_env(environ: dict[str, str] | None = None) -> dict[str, str]:
+    """The environment for Rerun's native viewer: an `ffmpeg` on PATH (imageio-ffmpeg's, linked into the cache),
+    without which it cannot decode the H.264 videos of an assessment."""
+    env = dict(os.environ if environ is None else environ)
+    if shutil.which("ffmpeg", path=env.get("PATH")):
+        return env
+    import imageio_ffmpeg
+
+    folder = cache_dir() / "bin"
+    folder.mkdir(parents=True, exist_ok=True)
+    link = folder / "ffmpeg"
+    if not link.exists():
+        link.unlink(missing_ok=True)  # a dangling link to an earlier install
+        try:
+            link.symlink_to(imageio_ffmpeg.get_ffmpeg_exe())
+        except FileExistsError:  # another process linked it first
+            pass
+    env["PATH"] = os.pathsep.join([str(folder), *filter(None, [env.get("PATH")])])
+    return env
 
 
 def log_video(rec: rr.RecordingStream, entity: str, mp4: Path) -> int:
