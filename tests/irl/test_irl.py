@@ -1,6 +1,8 @@
 """Adversarial IRL: rewards are relabelled, AIRL's r_psi is separable, absorbing states, spectral norm, gradient
 penalty, the ranking prior."""
 
+from typing import get_args
+
 import numpy as np
 import pytest
 import torch
@@ -8,6 +10,7 @@ import torch
 import fastrl
 from fastrl.agents.expert import ScriptedExpert
 from fastrl.agents.sb3 import build_model, make_vec_env
+from fastrl.data.overlays import OVERLAYS
 from fastrl.data.replay import expert_trajectories
 from fastrl.irl import AdversarialCallback, Discriminator
 from fastrl.irl.demonstrations import expert_transitions
@@ -15,9 +18,9 @@ from fastrl.irl.discriminator import absorbing_states, augment
 from fastrl.irl.fitting import DiscriminatorFit, input_gradient_norm, make_batch
 from fastrl.irl.ranking import RankedRollouts, noisy_expert_rollout, noisy_rollouts_batched
 from fastrl.runner.cloned import ClonedActor
-from fastrl.spec import load_spec
+from fastrl.spec import SpecError, load_spec
 from fastrl.spec.columns import discriminator_inputs, reward_inputs
-from fastrl.spec.irl import DiscriminatorSettings
+from fastrl.spec.irl import Degradation, DiscriminatorSettings
 
 from ..conftest import spec_file
 
@@ -339,3 +342,13 @@ def test_degraded_copies_of_recordings_are_ranked_against_each_other_only():
     assert len(better) > 50 and (ranked.source[better] == ranked.source[worse]).all()  # never across sources
     assert (ranked.noise[better] < ranked.noise[worse]).all()
     assert (ranked.source[better] == 1).any() and (ranked.source[better] == 0).any()
+
+
+def test_degraded_copies_name_overlays_that_exist_and_true_keeps_drift_jitter_slowed():
+    assert set(get_args(Degradation)) == set(OVERLAYS)
+    assert ranking([0.0, 1.0], 1, True).degraded_overlays == ("drift", "jitter", "slowed")
+    assert ranking([0.0, 1.0], 1, False).degraded_overlays == ()
+    assert ranking([0.0, 1.0], 1, ["paused"]).degraded_overlays == ("paused",)
+    with pytest.raises(SpecError) as e:
+        load_spec(spec_file("tracelines"), ["irl.discriminator.ranking_degraded=[wobble]"])
+    assert "ranking_degraded" in str(e.value)
