@@ -16,9 +16,11 @@ from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 
 from ..atomic import DiskFull, atomic_write, fsync_dir, is_disk_full, write_json
 from ..env.fast_env import FastEnv
+from ..spec.columns import value_inputs
 from ..spec.models import TaskSpec
 from ..spec.training import Encoder
 from .checkpoint_files import checkpoint_problem, file_sha256
+from .critic_columns import ColumnCriticPolicy
 from .encoder import PixelEncoder
 from .lean_sac import LeanSAC
 from .workers import FreshInfoVecEnv, SplitVecEnv
@@ -62,6 +64,9 @@ def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) 
     algo = LeanSAC if params.pop("lean_update", False) else ALGOS[kind.name]
     torch.set_num_threads(1)
     policy, policy_kwargs = "MlpPolicy", {"net_arch": arch, "activation_fn": act}
+    critic_columns = value_inputs(spec)
+    if critic_columns is not None and kind.name == "PPO":
+        policy, policy_kwargs["critic_columns"] = ColumnCriticPolicy, critic_columns
     image = spec.observation.image
     if image is not None:
         enc = train.encoder or Encoder()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..terms import OBSERVATION_TERMS
+from .irl import ppo_generator
 
 
 def columns_without(spec, terms: list[str]) -> list[int] | None:
@@ -22,3 +23,9 @@ def reward_inputs(spec) -> list[int] | None:
     """Observation columns shaped AIRL's reward r_psi sees: the discriminator's less `reward_ignore`."""
     d = spec.irl.discriminator
     return columns_without(spec, [*(d.ignore or []), *d.reward_ignore])
+
+
+def value_inputs(spec) -> list[int] | None:
+    """Observation columns the inverse-RL generator's critic (the learned value) sees; None: all of them."""
+    generator = ppo_generator(spec.train, spec.irl)
+    return columns_without(spec, generator.value_ignore) if generator is not None else None

@@ -139,6 +139,12 @@ class Generator(Strict):
         "to this, already gone (the pose as usual), so the critic, whose value scores trainees, also meets the late "
         "clock that slow trainees reach; 0: every episode at 0 s",
     )
+    value_ignore: list[str] = Field(
+        [],
+        description="observation terms the PPO generator's critic (whose value scores trainees) leaves out while the "
+        "policy sees them, e.g. where in the dome the scope and target are, so the value rests on what the view "
+        "shows (RESULTS: validity); default: none",
+    )
 
 
 class BehaviourCloning(Strict):

@@ -233,6 +233,15 @@ class TaskSpec(Strict):
                 for i, name in enumerate(getattr(self.irl.discriminator, field) or [])
                 if name not in observed
             ]
+            + [
+                (
+                    ("irl", "generator", "value_ignore", i),
+                    f"'{name}' is not observed (observation terms: {', '.join(observed)})",
+                    name,
+                )
+                for i, name in enumerate(self.irl.generator.value_ignore if self.irl.generator else [])
+                if name not in observed
+            ]
         )
         names = [p.name for p in self.scene.portals]
         if self.scope.portal not in names:
