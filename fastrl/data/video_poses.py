@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +15,7 @@ from scipy.signal import savgol_filter
 
 from ..spec import task_hash
 from ..spec.models import TaskSpec
+from .cache import cache_dir
 from .pose_net import VERSION, PoseEstimator, fit, load, save
 from .trajectory import Trajectory
 from .video_import import endoscope_size, import_video
@@ -23,13 +23,6 @@ from .video_import import endoscope_size, import_video
 EPISODES = 120  # labelled episodes (about 15,000 frames) an estimator learns from
 EPOCHS = 20
 SMOOTH_S = 0.25  # the estimates are smoothed over this window (a quadratic Savitzky-Golay filter)
-
-
-def cache_dir() -> Path:
-    """Where trained estimators are kept: $FASTRL_CACHE, else $XDG_CACHE_HOME/fastrl, else ~/.cache/fastrl."""
-    if os.environ.get("FASTRL_CACHE"):
-        return Path(os.environ["FASTRL_CACHE"])
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "fastrl"
 
 
 def world_hash(spec: TaskSpec) -> str:
