@@ -35,7 +35,7 @@ from .rundir import update_meta
 
 @dataclass
 class Learner:
-    """A model on its vectorised env, the callbacks that make it learn from demonstrations, and their state."""
+    """A model on its vectorised env, the callbacks it learns with (an adversarial one first), and their state."""
 
     spec: TaskSpec
     venv: VecEnv
@@ -45,12 +45,11 @@ class Learner:
     demos: list[Trajectory] = field(default_factory=list)
     averaging: RewardAveraging | None = None
     console: Console | None = None
-    anchor: BaseCallback | None = None  # a warm start's cloning steps after each PPO update (train.warm_start)
 
     @property
     def parts(self) -> dict:
         """Extra state saved in checkpoints: the discriminator and its optimizer, the reward's snapshots."""
-        parts = {"discriminator": self.callbacks[0].fit} if self.callbacks else {}
+        parts = {"discriminator": self.callbacks[0].fit} if self.disc is not None else {}
         return parts | ({"reward_average": self.averaging} if self.averaging is not None else {})
 
     @property
@@ -60,7 +59,7 @@ class Learner:
 
     def stats(self) -> dict[str, float]:
         """The latest discriminator statistics, for the training curves."""
-        return dict(self.callbacks[0].stats) if self.callbacks else {}
+        return dict(self.callbacks[0].stats) if self.disc is not None else {}
 
     def learn(self, timesteps: int, monitor: BaseCallback) -> None:
         """Train for `timesteps` more steps (behavioural cloning: fit the demonstrations once; a cloned generator
@@ -72,8 +71,7 @@ class Learner:
                 self.console.print(f"generator: cloned from {len(self.demos)} demonstrations{matched}")
         if self.spec.irl.algorithm == "bc":
             return
-        anchor = [self.anchor] if self.anchor is not None else []
-        self.model.learn(timesteps, callback=[*self.callbacks, *anchor, monitor], reset_num_timesteps=False)
+        self.model.learn(timesteps, callback=[*self.callbacks, monitor], reset_num_timesteps=False)
 
     @cached_property
     def pairs(self) -> tuple:

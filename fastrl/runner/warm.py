@@ -50,7 +50,7 @@ def warm_start_run(run: Path, spec: TaskSpec, learner, recorder: RunRecorder, co
     finally:
         env.close()
     if cfg.anchor:
-        learner.anchor = CloneAnchor(data.obs, data.labels, steps=cfg.anchor, seed=spec.train.seed)
+        learner.callbacks.append(CloneAnchor(data.obs, data.labels, steps=cfg.anchor, seed=spec.train.seed))
     seconds = time.perf_counter() - t0
     update_meta(run, warm_start={"rounds": len(rows), "pairs": rows[-1]["dagger_pairs"], "seconds": seconds})
     return seconds
