@@ -174,8 +174,10 @@ def held_to_limit(traj: Trajectory, spec: TaskSpec, replayed: int) -> Trajectory
 def learned_scores(networks, obs: np.ndarray) -> dict:
     """Learned return, mean value and mean potential of one trajectory's observations, and the value of each state
     ("values") and reward ("rewards"); each trajectory is evaluated as one batch, so its numbers never depend on
-    the others."""
-    values, rewards = networks.value(obs).astype(float), networks.reward(obs).astype(float)
+    the others. The reward is counted from the networks' ceiling (the best demonstrated step earns zero), so that
+    every step costs and a slower trainee never sums higher for the time alone."""
+    values = networks.value(obs).astype(float)
+    rewards = networks.reward(obs).astype(float) - networks.reward_ceiling
     return {
         "reward": float(rewards.sum()),
         "value": float(values.mean()),

@@ -24,6 +24,7 @@ from torch import nn
 
 from ..atomic import atomic_write
 from .discriminator import Discriminator
+from .fitting import Transitions
 from .network_parts import FORMAT, HEADER_KEY
 from .networks import Networks, load_networks  # noqa: F401  (loading beside saving)
 
@@ -211,11 +212,13 @@ def save_networks(
     disc: Discriminator | None,
     gamma: float,
     snapshots: list[dict[str, torch.Tensor]] | None = None,
+    demonstrations: Transitions | None = None,
 ) -> list[Path]:
     """Write policy, value and (with a discriminator) reward as .safetensors files into out_dir; return the paths.
 
     With `snapshots` (shaped AIRL's r_psi and h during training), the reward also holds them and the final
-    networks as the members of their average."""
+    networks as the members of their average. With `demonstrations`, the reward also holds its `ceiling`: the
+    highest reward, as loading evaluates it, of any demonstrated transition."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     norm, norm_tensors = obs_normalization(venv)
@@ -230,10 +233,14 @@ def save_networks(
         exports["reward"] = meta, tensors
     else:  # a stale reward from an earlier export would be loaded as this run's
         (out_dir / "reward.safetensors").unlink(missing_ok=True)
+    common = {"obs_dim": int(model.observation_space.shape[0]), "obs_norm": norm}
     paths = []
     for name, (meta, tensors) in exports.items():
-        meta = {**meta, "obs_dim": int(model.observation_space.shape[0]), "obs_norm": norm}
-        paths += write_network(out_dir, name, meta, {**tensors, **norm_tensors})
+        paths += write_network(out_dir, name, meta | common, tensors | norm_tensors)
+    if "reward" in exports and demonstrations is not None and len(demonstrations):
+        ceiling = load_networks(out_dir).transition_reward(demonstrations.obs, demonstrations.next_obs).max()
+        meta, tensors = exports["reward"]
+        write_network(out_dir, "reward", meta | common | {"ceiling": float(ceiling)}, tensors | norm_tensors)
     return paths
 
 

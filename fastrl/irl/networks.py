@@ -74,6 +74,9 @@ class Networks:
         for key in ("gamma", "absorbing", "absorbing_value", "absorbing_reward"):
             if key not in loaded.meta:
                 raise ValueError(f"{loaded.path}: missing key {key!r}")
+        ceiling = loaded.meta.get("ceiling", 0.0)
+        if type(ceiling) not in (int, float) or not np.isfinite(ceiling):
+            raise ValueError(f"{loaded.path}: ceiling must be a finite number, got {ceiling!r}")
         for key in ("inputs", "reward_inputs"):
             cols = loaded.meta.get(key)
             if cols is not None and not (isinstance(cols, list) and all(type(i) is int and i >= 0 for i in cols)):
@@ -152,12 +155,22 @@ class Networks:
 
     def reward(self, obs: np.ndarray) -> np.ndarray:
         """Per-step reward (T,) of raw observations (T+1, d): AIRL r_psi(s_t), GAIL logit(s_t, s_t+1)."""
+        return self.transition_reward(obs[:-1], obs[1:])
+
+    def transition_reward(self, obs: np.ndarray, next_obs: np.ndarray) -> np.ndarray:
+        """The reward (n,) of n transitions (s, s') of raw observations: AIRL r_psi(s), GAIL logit(s, s')."""
         r = self._reward_pair()
         if r.meta["form"] == "state":
-            rows = [m.r_psi(self._states(r, obs[:-1], "reward_inputs", m.norm))[:, 0] for m in self._members]
+            rows = [m.r_psi(self._states(r, obs, "reward_inputs", m.norm))[:, 0] for m in self._members]
             return np.stack(rows).mean(0, dtype=np.float32)
-        s = self._states(r, obs)
-        return r.parts["net"](np.concatenate([s[:-1], s[1:]], axis=-1))[:, 0]
+        s, s2 = self._states(r, obs), self._states(r, next_obs)
+        return r.parts["net"](np.concatenate([s, s2], axis=-1))[:, 0]
+
+    @property
+    def reward_ceiling(self) -> float:
+        """The highest reward of any demonstrated transition (0 for networks saved without it): AIRL and GAIL leave
+        the reward's constant free, so a score sums reward minus this and no demonstrated step earns above zero."""
+        return float(self._reward_pair().meta.get("ceiling", 0.0))
 
     def potential(self, obs: np.ndarray) -> np.ndarray:
         """AIRL's shaping potential h(s) of a batch of raw observations."""

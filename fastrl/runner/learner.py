@@ -23,7 +23,7 @@ from ..env.fast_env import FastEnv
 from ..irl import AdversarialCallback, Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
 from ..irl.averaging import RewardAveraging
 from ..irl.demonstrations import expert_transitions
-from ..irl.fitting import DiscriminatorFit
+from ..irl.fitting import DiscriminatorFit, Transitions
 from ..irl.ranking import RankedRollouts
 from ..model.scope import joint_ranges
 from ..spec.columns import discriminator_inputs, reward_inputs
@@ -56,6 +56,11 @@ class Learner:
     def snapshots(self) -> list | None:
         """Shaped AIRL's r_psi and h copied during training, to save as an averaged reward; None: no averaging."""
         return None if self.averaging is None else self.averaging.snapshots
+
+    @property
+    def demonstrated(self) -> Transitions | None:
+        """The demonstrations' transitions the discriminator learns from; None without one."""
+        return self.callbacks[0].expert if self.disc is not None else None
 
     def stats(self) -> dict[str, float]:
         """The latest discriminator statistics, for the training curves."""

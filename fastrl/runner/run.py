@@ -229,7 +229,8 @@ def _stages(
     save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state, learner.parts)
     save_checkpoint(run / "final", model, venv, state, learner.parts)
     if spec.observation.image is None:  # the safetensors export holds MLPs: a pixel policy stays in final/
-        save_networks(run / "networks", model, venv, learner.disc, spec.learning().params().gamma, learner.snapshots)
+        gamma = spec.learning().params().gamma
+        save_networks(run / "networks", model, venv, learner.disc, gamma, learner.snapshots, learner.demonstrated)
     update_meta(
         run,
         status="evaluating",

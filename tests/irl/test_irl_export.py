@@ -18,7 +18,9 @@ from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.env import FastEnv
 from fastrl.irl import Discriminator
 from fastrl.irl.discriminator import absorbing_states, augment
+from fastrl.assess.scoring import learned_scores
 from fastrl.irl.export import load_networks, reward_snapshot, save_networks
+from fastrl.irl.fitting import Transitions
 from fastrl.spec import load_spec
 
 from ..conftest import spec_file
@@ -223,6 +225,27 @@ def test_learned_return_adds_the_absorbing_value_only_when_terminated(ppo_run, t
     short = obs[:4]  # a short episode: the absorbing value weighs more
     diff = nets.learned_return(short, True, gamma=0.5) - nets.learned_return(short, False, gamma=0.5)
     assert diff == pytest.approx(0.5**3 * r_abs / 0.5, rel=1e-5)
+
+
+@pytest.mark.parametrize("kind", ["airl", "gail"])
+def test_the_reward_ceiling_is_the_best_demonstrated_transition(ppo_run, tmp_path, kind):
+    model, venv, obs = ppo_run
+    disc = spectral_disc(obs.shape[1], kind)
+    save_networks(tmp_path, model, venv, disc, GAMMA)
+    assert load_networks(tmp_path).reward_ceiling == 0.0  # saved without demonstrations: the raw reward
+    shown = Transitions(obs[:-1], obs[1:], np.zeros(len(obs) - 1, np.float32), np.zeros((len(obs) - 1, 1)))
+    save_networks(tmp_path, model, venv, disc, GAMMA, demonstrations=shown.take(slice(0, 12)))
+    nets = load_networks(tmp_path)
+    r = nets.reward(obs)
+    assert nets.reward_ceiling == pytest.approx(float(r[:12].max()), abs=1e-6)
+    assert nets.reward_ceiling != pytest.approx(float(r.max()), abs=1e-6)  # only the demonstrated steps count
+    scores = learned_scores(nets, obs)
+    assert scores["reward"] == pytest.approx(float((r - nets.reward_ceiling).sum()), rel=1e-6)
+    assert scores["rewards"][:12].max() == pytest.approx(0.0, abs=1e-6)
+    for bad in ("high", float("nan")):
+        edit_header(tmp_path, "reward", lambda m, bad=bad: m.update(ceiling=bad))
+        with pytest.raises(ValueError, match="reward.safetensors: ceiling must be a finite number"):
+            load_networks(tmp_path)
 
 
 def test_an_averaged_reward_is_the_mean_of_its_members_each_under_its_own_normalisation(ppo_run, tmp_path):
