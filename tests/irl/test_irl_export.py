@@ -15,10 +15,10 @@ from safetensors import safe_open
 from safetensors.torch import load_file, save_file
 
 from fastrl.agents.sb3 import build_model, make_vec_env
+from fastrl.assess.scoring import learned_scores
 from fastrl.env import FastEnv
 from fastrl.irl import Discriminator
 from fastrl.irl.discriminator import absorbing_states, augment
-from fastrl.assess.scoring import learned_scores
 from fastrl.irl.export import load_networks, reward_snapshot, save_networks
 from fastrl.irl.fitting import Transitions
 from fastrl.spec import load_spec
