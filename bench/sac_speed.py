@@ -41,7 +41,13 @@ SCHEDULES = {
 def build(name: str, demos):
     """A SAC model on TraceLines with the schedule, and its callback (or None)."""
     from fastrl.agents.sb3 import build_model, make_vec_env
-    from fastrl.irl import Discriminator, DiscriminatorFit, OffPolicyAdversarialCallback, RelabelingReplayBuffer
+    from fastrl.irl import (
+        Discriminator,
+        DiscriminatorFit,
+        DiscriminatorForm,
+        OffPolicyAdversarialCallback,
+        RelabelingReplayBuffer,
+    )
     from fastrl.spec import load_spec
 
     n_envs, freq, grad, batch, net, lean, with_disc = SCHEDULES[name]
@@ -62,7 +68,7 @@ def build(name: str, demos):
     model = build_model(spec, venv, replay_buffer_class=RelabelingReplayBuffer if with_disc else None)
     cb = None
     if with_disc:
-        disc = Discriminator(venv.observation_space.shape[0], "airl", 0.99, spectral=True)
+        disc = Discriminator(venv.observation_space.shape[0], DiscriminatorForm(kind="airl", gamma=0.99, spectral=True))
         cb = OffPolicyAdversarialCallback(DiscriminatorFit(disc, lr=1e-3), demos(spec), current_rollout=True, steps=16)
     return model, cb
 

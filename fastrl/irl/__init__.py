@@ -5,6 +5,7 @@ from importlib import import_module
 _FROM = {
     "AdversarialCallback": ".adversarial",
     "Discriminator": ".discriminator",
+    "DiscriminatorForm": ".discriminator",
     "DiscriminatorFit": ".fitting",
     "OffPolicyAdversarialCallback": ".offpolicy",
     "RelabelingReplayBuffer": ".offpolicy",

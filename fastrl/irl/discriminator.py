@@ -11,6 +11,7 @@ With `reward_inputs`, shaped AIRL's r_psi sees only those (h still sees `inputs`
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Literal
 
 import torch
@@ -40,27 +41,34 @@ def absorbing_states(k: int, obs_dim: int) -> torch.Tensor:
     return s
 
 
+@dataclass(frozen=True, kw_only=True)
+class DiscriminatorForm:
+    """How a discriminator is built: GAIL or AIRL, its networks, and which terms its logit has."""
+
+    kind: Literal["gail", "airl"]
+    gamma: float
+    hidden: tuple[int, ...] = (64, 64)
+    spectral: bool = False
+    absorbing: bool = True
+    shaped: bool = True  # AIRL's shaped form; else one network on (s, s')
+    policy_term: bool = True
+
+
 class Discriminator(nn.Module):
     """Logits of 'expert' for transitions (s, s', terminal, log pi(a|s)) of augmented states; state-only rewards."""
 
     def __init__(
         self,
         obs_dim: int,
-        kind: Literal["gail", "airl"],
-        gamma: float,
+        form: DiscriminatorForm,
         *,
-        hidden=(64, 64),
-        spectral: bool = False,
-        absorbing: bool = True,
-        shaped: bool = True,
-        policy_term: bool = True,
         inputs: list[int] | None = None,
         reward_inputs: list[int] | None = None,
     ):
         super().__init__()
-        self.obs_dim, self.kind, self.gamma, self.policy_term = obs_dim, kind, gamma, policy_term
-        self.hidden, self.spectral, self.absorbing = tuple(hidden), spectral, absorbing
-        self.shaped = kind == "airl" and shaped  # AIRL's shaped form; else one network on (s, s')
+        self.obs_dim, self.kind, self.gamma, self.policy_term = obs_dim, form.kind, form.gamma, form.policy_term
+        self.hidden, self.spectral, self.absorbing = tuple(form.hidden), form.spectral, form.absorbing
+        self.shaped = form.kind == "airl" and form.shaped
         self.inputs = None if inputs is None else [int(i) for i in inputs]
         self.reward_inputs = self.inputs if reward_inputs is None else [int(i) for i in reward_inputs]
         for name, cols in (("_columns", self.inputs), ("_reward_columns", self.reward_inputs)):
@@ -68,11 +76,11 @@ class Discriminator(nn.Module):
         width = (obs_dim if inputs is None else len(self.inputs)) + 1
         if self.shaped:
             reward_width = (obs_dim if self.reward_inputs is None else len(self.reward_inputs)) + 1
-            self.r_psi = mlp(reward_width, self.hidden, sn=spectral)  # the reward kept for scoring
-            self.h = mlp(width, self.hidden, sn=spectral)  # the shaping potential
+            self.r_psi = mlp(reward_width, self.hidden, sn=self.spectral)  # the reward kept for scoring
+            self.h = mlp(width, self.hidden, sn=self.spectral)  # the shaping potential
             self.h_absorbing = nn.Parameter(torch.zeros(()))
         else:
-            self.net = mlp(2 * width, self.hidden, sn=spectral)
+            self.net = mlp(2 * width, self.hidden, sn=self.spectral)
         self.r_absorbing = nn.Parameter(torch.zeros(()))  # r_psi (or net) at the absorbing state
 
     @staticmethod

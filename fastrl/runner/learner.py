@@ -20,7 +20,13 @@ from ..data.recordings import load_recordings, with_actions
 from ..data.replay import demonstration_pairs
 from ..data.trajectory import Trajectory
 from ..env.fast_env import FastEnv
-from ..irl import AdversarialCallback, Discriminator, OffPolicyAdversarialCallback, RelabelingReplayBuffer
+from ..irl import (
+    AdversarialCallback,
+    Discriminator,
+    DiscriminatorForm,
+    OffPolicyAdversarialCallback,
+    RelabelingReplayBuffer,
+)
 from ..irl.averaging import RewardAveraging
 from ..irl.demonstrations import expert_transitions
 from ..irl.fitting import DiscriminatorFit, Transitions
@@ -171,13 +177,15 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     obs_dim = venv.observation_space.shape[0]
     disc = Discriminator(
         obs_dim,
-        irl.algorithm,
-        train.params().gamma,
-        hidden=tuple(d.hidden),
-        spectral=d.spectral_norm,
-        absorbing=d.absorbing,
-        shaped=d.shaped,
-        policy_term=d.policy_term,
+        DiscriminatorForm(
+            kind=irl.algorithm,
+            gamma=train.params().gamma,
+            hidden=tuple(d.hidden),
+            spectral=d.spectral_norm,
+            absorbing=d.absorbing,
+            shaped=d.shaped,
+            policy_term=d.policy_term,
+        ),
         inputs=discriminator_inputs(spec),
         reward_inputs=reward_inputs(spec),
     )

@@ -12,7 +12,7 @@ from fastrl.agents.expert import ScriptedExpert
 from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.data.overlays import OVERLAYS
 from fastrl.data.replay import expert_trajectories
-from fastrl.irl import AdversarialCallback, Discriminator
+from fastrl.irl import AdversarialCallback, Discriminator, DiscriminatorForm
 from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.discriminator import absorbing_states, augment
 from fastrl.irl.fitting import DiscriminatorFit, input_gradient_norm, make_batch
@@ -52,7 +52,7 @@ def test_rollout_rewards_are_replaced_by_the_discriminator(expert_data, kind):
     assert expert.terminal[-1] == 1.0 and len(expert.obs) == len(expert.actions)
     venv = make_vec_env(spec, 2, 0)
     model = build_model(spec, venv)
-    disc = Discriminator(venv.observation_space.shape[0], kind, 0.99)
+    disc = Discriminator(venv.observation_space.shape[0], DiscriminatorForm(kind=kind, gamma=0.99))
     fit = DiscriminatorFit(disc, batch_size=64)
     cb = AdversarialCallback(fit, expert, epochs=1, scale_reward=False)  # scaling: test_irl_scaling
     before = [p.detach().clone() for p in disc.parameters()]
@@ -82,7 +82,7 @@ def test_rollout_rewards_are_replaced_by_the_discriminator(expert_data, kind):
 
 
 def test_airl_reward_is_separable_from_the_shaping():
-    disc = Discriminator(6, "airl", 0.9, absorbing=False)
+    disc = Discriminator(6, DiscriminatorForm(kind="airl", gamma=0.9, absorbing=False))
     s, s2 = augment(torch.randn(32, 6)), augment(torch.randn(32, 6))
     term, log_pi = torch.zeros(32), torch.zeros(32)
     r, f = disc.reward(s).detach().clone(), disc.f(s, s2, term).detach().clone()
@@ -97,11 +97,11 @@ def test_airl_reward_is_separable_from_the_shaping():
     assert torch.allclose(disc.f(s, s2, torch.ones(32)), disc.reward(s) - disc.h(s).squeeze(-1))
     assert torch.allclose(disc.logits(s, s2, term, log_pi + 1.0), disc.logits(s, s2, term, log_pi) - 1.0)
     with pytest.raises(ValueError):
-        Discriminator(6, "gail", 0.9).reward(s)
+        Discriminator(6, DiscriminatorForm(kind="gail", gamma=0.9)).reward(s)
 
 
 def test_absorbing_states_keep_the_terminal_potential_and_value_the_end():
-    disc = Discriminator(6, "airl", 0.9, absorbing=True)
+    disc = Discriminator(6, DiscriminatorForm(kind="airl", gamma=0.9, absorbing=True))
     s, s2 = augment(torch.randn(4, 6)), augment(torch.randn(4, 6))
     with torch.no_grad():
         kept = disc.reward(s) + 0.9 * disc.potential(s2) - disc.potential(s)
@@ -110,7 +110,7 @@ def test_absorbing_states_keep_the_terminal_potential_and_value_the_end():
         r_abs = float(disc.f(a, a, torch.zeros(1))[0])
     assert disc.absorbing_value() == pytest.approx(r_abs / (1 - 0.9), rel=1e-5)
     assert torch.allclose(disc.terminal_bonus(torch.tensor([0.0, 1.0])), torch.tensor([0.0, 0.9 * r_abs / 0.1]))
-    assert Discriminator(6, "airl", 0.9, absorbing=False).absorbing_value() == 0.0
+    assert Discriminator(6, DiscriminatorForm(kind="airl", gamma=0.9, absorbing=False)).absorbing_value() == 0.0
 
 
 def test_batches_get_one_absorbing_transition_per_terminated_episode():
@@ -127,7 +127,7 @@ def test_batches_get_one_absorbing_transition_per_terminated_episode():
 def layer_norms_after_training(spectral: bool) -> list[float]:
     """Largest singular value of each linear layer after pushing the logits up for 50 steps."""
     torch.manual_seed(0)
-    disc = Discriminator(8, "gail", 0.99, hidden=(32, 32), spectral=spectral)
+    disc = Discriminator(8, DiscriminatorForm(kind="gail", gamma=0.99, hidden=(32, 32), spectral=spectral))
     optim = torch.optim.Adam(disc.parameters(), lr=1e-2)
     x = augment(torch.randn(256, 8) * 5)
     for _ in range(50):
@@ -152,7 +152,7 @@ def gradient_norm_after_fitting(kind: str, penalty: float) -> float:
     """Mean |grad_(s, s') logit| between policy and expert rows after 150 steps on two well-separated clouds."""
     torch.manual_seed(0)
     rng = np.random.default_rng(0)
-    disc = Discriminator(6, kind, 0.99, hidden=(32, 32))
+    disc = Discriminator(6, DiscriminatorForm(kind=kind, gamma=0.99, hidden=(32, 32)))
     policy = make_batch(rng.normal(size=(128, 6)), rng.normal(size=(128, 6)), np.zeros(128), np.zeros(128), True)
     expert = make_batch(rng.normal(3, 1, (128, 6)), rng.normal(3, 1, (128, 6)), np.zeros(128), np.zeros(128), True)
     DiscriminatorFit(disc, lr=1e-2, batch_size=128, gradient_penalty=penalty).steps(policy, expert, 150)
@@ -166,7 +166,7 @@ def test_the_gradient_penalty_holds_the_logits_slope_near_one(kind):
 
 
 def test_standard_airl_is_one_network_on_transitions():
-    disc = Discriminator(6, "airl", 0.9, shaped=False)
+    disc = Discriminator(6, DiscriminatorForm(kind="airl", gamma=0.9, shaped=False))
     s, s2 = augment(torch.randn(8, 6)), augment(torch.randn(8, 6))
     with torch.no_grad():
         f = disc.net(torch.cat([s, s2], dim=-1)).squeeze(-1)
@@ -178,16 +178,19 @@ def test_standard_airl_is_one_network_on_transitions():
 
 
 def test_airl_without_the_policy_term_ignores_log_pi():
-    disc = Discriminator(6, "airl", 0.9, policy_term=False)
+    disc = Discriminator(6, DiscriminatorForm(kind="airl", gamma=0.9, policy_term=False))
     s, s2, term = augment(torch.randn(8, 6)), augment(torch.randn(8, 6)), torch.zeros(8)
     with torch.no_grad():
         assert torch.allclose(disc.logits(s, s2, term, torch.full((8,), 300.0)), disc.f(s, s2, term))
-    assert disc.config()["policy_term"] is False and Discriminator(6, "airl", 0.9).config()["policy_term"]
+    assert (
+        disc.config()["policy_term"] is False
+        and Discriminator(6, DiscriminatorForm(kind="airl", gamma=0.9)).config()["policy_term"]
+    )
 
 
 @pytest.mark.parametrize("kind", ["gail", "airl"])
 def test_a_discriminator_with_inputs_does_not_see_the_other_columns(kind):
-    disc = Discriminator(6, kind, 0.9, inputs=[0, 1, 2, 4])
+    disc = Discriminator(6, DiscriminatorForm(kind=kind, gamma=0.9), inputs=[0, 1, 2, 4])
     first = next(m for m in disc.modules() if isinstance(m, torch.nn.Linear))
     assert first.in_features == (5 if kind == "airl" else 10)  # 4 columns and the absorbing flag (twice for GAIL)
     s, s2, term, lp = augment(torch.randn(8, 6)), augment(torch.randn(8, 6)), torch.zeros(8), torch.zeros(8)
@@ -198,11 +201,14 @@ def test_a_discriminator_with_inputs_does_not_see_the_other_columns(kind):
         assert torch.allclose(disc.logits(s, s2, term, lp), disc.logits(moved, moved2, term, lp))
         s[:, 4] += 10.0
         assert not torch.allclose(disc.logits(s, s2, term, lp), disc.logits(moved, moved2, term, lp))
-    assert disc.config()["inputs"] == [0, 1, 2, 4] and Discriminator(6, kind, 0.9).config()["inputs"] is None
+    assert (
+        disc.config()["inputs"] == [0, 1, 2, 4]
+        and Discriminator(6, DiscriminatorForm(kind=kind, gamma=0.9)).config()["inputs"] is None
+    )
 
 
 def test_airl_reward_inputs_leave_columns_out_of_r_psi_but_not_of_h():
-    disc = Discriminator(6, "airl", 0.9, reward_inputs=[0, 1, 2, 3, 4])
+    disc = Discriminator(6, DiscriminatorForm(kind="airl", gamma=0.9), reward_inputs=[0, 1, 2, 3, 4])
     s = augment(torch.randn(8, 6))
     late = s.clone()
     late[:, 5] += 10.0  # the column r_psi does not see
@@ -212,7 +218,10 @@ def test_airl_reward_inputs_leave_columns_out_of_r_psi_but_not_of_h():
         s[:, 4] += 10.0
         assert not torch.allclose(disc.reward(s), disc.reward(late))
     assert disc.config()["reward_inputs"] == [0, 1, 2, 3, 4] and disc.config()["inputs"] is None
-    assert Discriminator(6, "airl", 0.9, inputs=[0, 1]).config()["reward_inputs"] == [0, 1]  # default: inputs
+    assert Discriminator(6, DiscriminatorForm(kind="airl", gamma=0.9), inputs=[0, 1]).config()["reward_inputs"] == [
+        0,
+        1,
+    ]  # default: inputs
 
 
 def test_reward_ignore_narrows_the_discriminator_inputs_for_r_psi():
@@ -248,7 +257,7 @@ def test_gail_ignores_the_clock_by_default_and_airl_sees_it():
 @pytest.mark.parametrize("kind", ["gail", "airl"])
 def test_absorbing_rows_train_only_the_absorbing_constants(kind):
     torch.manual_seed(0)
-    disc = Discriminator(6, kind, 0.99, hidden=(16, 16), spectral=True)
+    disc = Discriminator(6, DiscriminatorForm(kind=kind, gamma=0.99, hidden=(16, 16), spectral=True))
     ends = make_batch(np.random.randn(4, 6), np.random.randn(4, 6), np.ones(4), np.zeros(4), absorbing=True)
     absorbed = ends.take(slice(4, 8))  # the four absorbing rows appended for four terminated episodes
     assert torch.equal(absorbed.s[:, -1], torch.ones(4)) and torch.equal(absorbed.s[:, :-1], torch.zeros(4, 6))
@@ -281,7 +290,7 @@ def test_the_ranking_loss_teaches_r_psi_that_less_noise_is_better():
     spec = load_spec(spec_file("tracelines"), ["episode.time_limit=8"])
     ranked = RankedRollouts(fastrl.make(spec), ranking([0.0, 0.5, 1.0], 2), snippet=20)
     torch.manual_seed(0)
-    disc = Discriminator(ranked.raw.shape[2], "airl", 0.99, hidden=(32, 32))
+    disc = Discriminator(ranked.raw.shape[2], DiscriminatorForm(kind="airl", gamma=0.99, hidden=(32, 32)))
     states, rng = ranked.states(lambda o: o), np.random.default_rng(0)
     optim = torch.optim.Adam(disc.parameters(), lr=1e-3)
     with torch.no_grad():

@@ -17,7 +17,7 @@ from safetensors.torch import load_file, save_file
 from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.assess.scoring import learned_scores
 from fastrl.env import FastEnv
-from fastrl.irl import Discriminator
+from fastrl.irl import Discriminator, DiscriminatorForm
 from fastrl.irl.discriminator import absorbing_states, augment
 from fastrl.irl.export import load_networks, reward_snapshot, save_networks
 from fastrl.irl.fitting import Transitions
@@ -93,12 +93,7 @@ def spectral_disc(
     torch.manual_seed(seed)
     disc = Discriminator(
         obs_dim,
-        kind,
-        GAMMA,
-        hidden=(16, 16),
-        spectral=True,
-        absorbing=absorbing,
-        shaped=shaped,
+        DiscriminatorForm(kind=kind, gamma=GAMMA, hidden=(16, 16), spectral=True, absorbing=absorbing, shaped=shaped),
         inputs=inputs,
         reward_inputs=reward_inputs,
     )

@@ -6,7 +6,7 @@ import pytest
 import fastrl
 from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.data.replay import expert_trajectories
-from fastrl.irl import AdversarialCallback, Discriminator, DiscriminatorFit, Transitions
+from fastrl.irl import AdversarialCallback, Discriminator, DiscriminatorFit, DiscriminatorForm, Transitions
 from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.history import PolicyHistory
 from fastrl.spec import load_spec
@@ -52,7 +52,9 @@ def run_with_history(normalised: bool):
         venv.obs_rms.mean[:], venv.obs_rms.var[:], venv.training = 3.0, 0.25, False
     model = build_model(spec, venv)
     cb = AdversarialCallback(
-        DiscriminatorFit(Discriminator(venv.observation_space.shape[0], "airl", 0.99), batch_size=64),
+        DiscriminatorFit(
+            Discriminator(venv.observation_space.shape[0], DiscriminatorForm(kind="airl", gamma=0.99)), batch_size=64
+        ),
         expert,
         epochs=1,
         history=1000,

@@ -7,7 +7,13 @@ import torch
 import fastrl
 from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.data.replay import expert_trajectories
-from fastrl.irl import Discriminator, DiscriminatorFit, OffPolicyAdversarialCallback, RelabelingReplayBuffer
+from fastrl.irl import (
+    Discriminator,
+    DiscriminatorFit,
+    DiscriminatorForm,
+    OffPolicyAdversarialCallback,
+    RelabelingReplayBuffer,
+)
 from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.discriminator import augment
 from fastrl.spec import load_spec
@@ -40,7 +46,9 @@ def train(spec, expert, current_rollout: bool, spectral: bool = False, steps: in
     """SAC with the off-policy adversarial callback for a few hundred steps, counting discriminator fits."""
     venv = make_vec_env(spec, 2, 0)
     model = build_model(spec, venv, replay_buffer_class=RelabelingReplayBuffer)
-    disc = Discriminator(venv.observation_space.shape[0], "airl", 0.99, hidden=(32, 32), spectral=spectral)
+    disc = Discriminator(
+        venv.observation_space.shape[0], DiscriminatorForm(kind="airl", gamma=0.99, hidden=(32, 32), spectral=spectral)
+    )
     cb = OffPolicyAdversarialCallback(
         DiscriminatorFit(disc, batch_size=32), expert, current_rollout=current_rollout, steps=2, every=every
     )

@@ -6,7 +6,7 @@ import pytest
 import fastrl
 from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.data.replay import expert_trajectories
-from fastrl.irl import AdversarialCallback, Discriminator, DiscriminatorFit
+from fastrl.irl import AdversarialCallback, Discriminator, DiscriminatorFit, DiscriminatorForm
 from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.scaling import ReturnScale
 from fastrl.spec import load_spec
@@ -42,7 +42,9 @@ def test_the_generator_gets_the_scaled_learned_reward(monkeypatch):
     venv = make_vec_env(spec, 2, 0)
     model = build_model(spec, venv)
     cb = AdversarialCallback(
-        DiscriminatorFit(Discriminator(venv.observation_space.shape[0], "airl", 0.99), batch_size=64),
+        DiscriminatorFit(
+            Discriminator(venv.observation_space.shape[0], DiscriminatorForm(kind="airl", gamma=0.99)), batch_size=64
+        ),
         expert,
         epochs=1,
         scale_reward=True,
