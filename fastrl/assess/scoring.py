@@ -172,15 +172,19 @@ def held_to_limit(traj: Trajectory, spec: TaskSpec, replayed: int) -> Trajectory
 
 
 def learned_scores(networks, obs: np.ndarray) -> dict:
-    """Learned return, mean value and mean potential of one trajectory's observations, and the value of each state
+    """Learned return, value and mean potential of one trajectory's observations, and the value of each state
     ("values") and reward ("rewards"); each trajectory is evaluated as one batch, so its numbers never depend on
-    the others. The reward is counted from the networks' ceiling (the best demonstrated step earns zero), so that
-    every step costs and a slower trainee never sums higher for the time alone."""
-    values = networks.value(obs).astype(float)
+    the others. Reward and value count from their ceilings, the best the demonstrations reached, and are summed:
+    a demonstrated step earns at most zero, every step below costs, and a slower trainee never scores higher for
+    the time alone. Networks saved without a value ceiling keep the mean value."""
     rewards = networks.reward(obs).astype(float) - networks.reward_ceiling
+    values = networks.value(obs).astype(float)
+    ceiling = networks.value_ceiling
+    if ceiling is not None:
+        values = values - ceiling
     return {
         "reward": float(rewards.sum()),
-        "value": float(values.mean()),
+        "value": float(values.mean() if ceiling is None else values.sum()),
         "potential": float(networks.potential(obs).mean()) if networks.has_potential else None,
         "values": values,
         "rewards": rewards,

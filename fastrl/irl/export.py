@@ -26,7 +26,7 @@ from ..atomic import atomic_write
 from .discriminator import Discriminator
 from .fitting import Transitions
 from .network_parts import FORMAT, HEADER_KEY
-from .networks import Networks, load_networks  # noqa: F401  (loading beside saving)
+from .networks import Networks, load_networks
 
 ACTIVATIONS = {nn.Tanh: "tanh", nn.ReLU: "relu"}
 
@@ -217,8 +217,8 @@ def save_networks(
     """Write policy, value and (with a discriminator) reward as .safetensors files into out_dir; return the paths.
 
     With `snapshots` (shaped AIRL's r_psi and h during training), the reward also holds them and the final
-    networks as the members of their average. With `demonstrations`, the reward also holds its `ceiling`: the
-    highest reward, as loading evaluates it, of any demonstrated transition."""
+    networks as the members of their average. With `demonstrations`, value and reward also hold their `ceiling`
+    (demonstrated_ceilings)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     norm, norm_tensors = obs_normalization(venv)
@@ -238,10 +238,19 @@ def save_networks(
     for name, (meta, tensors) in exports.items():
         paths += write_network(out_dir, name, meta | common, tensors | norm_tensors)
     if "reward" in exports and demonstrations is not None and len(demonstrations):
-        ceiling = load_networks(out_dir).transition_reward(demonstrations.obs, demonstrations.next_obs).max()
-        meta, tensors = exports["reward"]
-        write_network(out_dir, "reward", meta | common | {"ceiling": float(ceiling)}, tensors | norm_tensors)
+        for name, ceiling in demonstrated_ceilings(load_networks(out_dir), demonstrations).items():
+            meta, tensors = exports[name]
+            write_network(out_dir, name, meta | common | {"ceiling": ceiling}, tensors | norm_tensors)
     return paths
+
+
+def demonstrated_ceilings(networks: Networks, shown: Transitions) -> dict[str, float]:
+    """The highest learned value of any demonstrated state and reward of any demonstrated transition, as loading
+    evaluates them: the zero each learned score counts from."""
+    return {
+        "value": float(networks.value(shown.obs).max()),
+        "reward": float(networks.transition_reward(shown.obs, shown.next_obs).max()),
+    }
 
 
 # ----------------------------------------------------------------------------------------------- load

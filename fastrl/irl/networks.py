@@ -22,6 +22,14 @@ class RewardMember:
     norm: ObsNorm
 
 
+def checked_ceiling(loaded: Loaded) -> Loaded:
+    """The loaded pair, if its optional `ceiling` (the best demonstrated output) is a finite number."""
+    ceiling = loaded.meta.get("ceiling", 0.0)
+    if type(ceiling) not in (int, float) or not np.isfinite(ceiling):
+        raise ValueError(f"{loaded.path}: ceiling must be a finite number, got {ceiling!r}")
+    return loaded
+
+
 def reward_members(r: Loaded) -> list[RewardMember]:
     """The members of an averaged reward ('average' in the JSON), each checked against the final parts' shapes."""
     average = r.meta["average"]
@@ -59,7 +67,7 @@ class Networks:
         self._policy = read_pair(self.directory, "policy")
         bounds = ("pi", "action.low", "action.high")
         self.output = self._policy.variant("output", {"argmax": ("pi",), "clip": bounds, "tanh_rescale": bounds})
-        self._value = read_pair(self.directory, "value")
+        self._value = checked_ceiling(read_pair(self.directory, "value"))
         self.value_form = self._value.variant("form", {"state": ("v",), "q_of_policy": ("pi", "q1")})
         self._reward = self._read_reward()
         self._members = self._read_members(averaged)
@@ -68,15 +76,12 @@ class Networks:
         """The reward pair, None if none was saved."""
         if not (self.directory / "reward.safetensors").exists():
             return None
-        loaded = read_pair(self.directory, "reward")
+        loaded = checked_ceiling(read_pair(self.directory, "reward"))
         loaded.variant("kind", {"airl": (), "gail": ()})
         loaded.variant("form", {"state": ("r_psi", "h"), "transition": ("net",)})
         for key in ("gamma", "absorbing", "absorbing_value", "absorbing_reward"):
             if key not in loaded.meta:
                 raise ValueError(f"{loaded.path}: missing key {key!r}")
-        ceiling = loaded.meta.get("ceiling", 0.0)
-        if type(ceiling) not in (int, float) or not np.isfinite(ceiling):
-            raise ValueError(f"{loaded.path}: ceiling must be a finite number, got {ceiling!r}")
         for key in ("inputs", "reward_inputs"):
             cols = loaded.meta.get(key)
             if cols is not None and not (isinstance(cols, list) and all(type(i) is int and i >= 0 for i in cols)):
@@ -171,6 +176,11 @@ class Networks:
         """The highest reward of any demonstrated transition (0 for networks saved without it): AIRL and GAIL leave
         the reward's constant free, so a score sums reward minus this and no demonstrated step earns above zero."""
         return float(self._reward_pair().meta.get("ceiling", 0.0))
+
+    @property
+    def value_ceiling(self) -> float | None:
+        """The highest value of any demonstrated state (None for networks saved without it)."""
+        return self._value.meta.get("ceiling")
 
     def potential(self, obs: np.ndarray) -> np.ndarray:
         """AIRL's shaping potential h(s) of a batch of raw observations."""

@@ -223,24 +223,36 @@ def test_learned_return_adds_the_absorbing_value_only_when_terminated(ppo_run, t
 
 
 @pytest.mark.parametrize("kind", ["airl", "gail"])
-def test_the_reward_ceiling_is_the_best_demonstrated_transition(ppo_run, tmp_path, kind):
+def test_reward_and_value_count_from_the_best_demonstrated_step(ppo_run, tmp_path, kind):
     model, venv, obs = ppo_run
     disc = spectral_disc(obs.shape[1], kind)
     save_networks(tmp_path, model, venv, disc, GAMMA)
-    assert load_networks(tmp_path).reward_ceiling == 0.0  # saved without demonstrations: the raw reward
+    old = load_networks(tmp_path)  # saved without demonstrations: the raw sum and the mean value
+    assert (old.reward_ceiling, old.value_ceiling) == (0.0, None)
+    assert learned_scores(old, obs)["value"] == pytest.approx(float(old.value(obs).mean()), rel=1e-6)
     shown = Transitions(obs[:-1], obs[1:], np.zeros(len(obs) - 1, np.float32), np.zeros((len(obs) - 1, 1)))
     save_networks(tmp_path, model, venv, disc, GAMMA, demonstrations=shown.take(slice(0, 12)))
     nets = load_networks(tmp_path)
-    r = nets.reward(obs)
+    r, v = nets.reward(obs), nets.value(obs)
     assert nets.reward_ceiling == pytest.approx(float(r[:12].max()), abs=1e-6)
+    assert nets.value_ceiling == pytest.approx(float(v[:12].max()), abs=1e-6)
     assert nets.reward_ceiling != pytest.approx(float(r.max()), abs=1e-6)  # only the demonstrated steps count
+    assert nets.value_ceiling != pytest.approx(float(v.max()), abs=1e-6)
     scores = learned_scores(nets, obs)
     assert scores["reward"] == pytest.approx(float((r - nets.reward_ceiling).sum()), rel=1e-6)
+    assert scores["value"] == pytest.approx(float((v - nets.value_ceiling).sum()), rel=1e-6)
     assert scores["rewards"][:12].max() == pytest.approx(0.0, abs=1e-6)
-    for bad in ("high", float("nan")):
-        edit_header(tmp_path, "reward", lambda m, bad=bad: m.update(ceiling=bad))
-        with pytest.raises(ValueError, match="reward.safetensors: ceiling must be a finite number"):
-            load_networks(tmp_path)
+    assert scores["values"][:12].max() == pytest.approx(0.0, abs=1e-6)
+    longer = np.concatenate([obs, obs[-1:].repeat(20, 0)])  # the last state held: the same states, more steps
+    held = learned_scores(nets, longer)["value"]
+    assert held == pytest.approx(scores["value"] + 20 * (v[-1] - nets.value_ceiling), rel=1e-5)
+    assert held < scores["value"]  # the held state is below the ceiling: more steps of it cost more
+    for name in ("reward", "value"):
+        for bad in ("high", float("nan")):
+            edit_header(tmp_path, name, lambda m, bad=bad: m.update(ceiling=bad))
+            with pytest.raises(ValueError, match=f"{name}.safetensors: ceiling must be a finite number"):
+                load_networks(tmp_path)
+        save_networks(tmp_path, model, venv, disc, GAMMA, demonstrations=shown)
 
 
 def test_an_averaged_reward_is_the_mean_of_its_members_each_under_its_own_normalisation(ppo_run, tmp_path):
