@@ -6,9 +6,9 @@ a kinematic overlay at rising severity, scored with the run's networks.
 
 RUN_DIR is an assess run (its `learned/` holds spec and networks) or a learned run. For each --seeds episode the
 scripted expert's recording is replayed as it is and with the overlay at each --severity (fastrl.data.overlays), and
-the summed learned reward, mean learned value and time are printed. Within an instance a score that answers the
-deficit falls with severity; its spread across instances at severity 0 is what a cohort's ranking must overcome
-(RESULTS: validity, the reward without the dome's coordinates).
+the learned reward and value scores (as `fastrl score` gives them) and time are printed. Within an instance a score
+that answers the deficit falls with severity; its spread across instances at severity 0 is what a cohort's ranking
+must overcome (RESULTS: validity, the reward without the dome's coordinates).
 """
 
 from __future__ import annotations

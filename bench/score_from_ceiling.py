@@ -43,6 +43,8 @@ def rescored(run: Path) -> dict:
     from scipy.stats import kendalltau
 
     from fastrl.assess.scoring import Scorer
+    from fastrl.irl.export import demonstrated_ceilings
+    from fastrl.irl.fitting import Transitions
     from fastrl.irl.networks import load_networks
     from fastrl.spec import load_spec
 
@@ -50,8 +52,10 @@ def rescored(run: Path) -> dict:
     nets = load_networks(learned / "networks")
     scorer = Scorer(load_spec(learned / "spec.yaml"), nets)
     best = [obs for _, obs in replayed(scorer, run / "best")]
-    r_star = max(float(nets.reward(obs).max()) for obs in best)
-    v_star = max(float(nets.value(obs[:-1]).max()) for obs in best)
+    obs, nxt = np.concatenate([o[:-1] for o in best]), np.concatenate([o[1:] for o in best])
+    shown = Transitions(obs, nxt, np.zeros(len(obs)), np.zeros((len(obs), 1)))  # terminals and actions unused
+    ceilings = demonstrated_ceilings(nets, shown)  # as `fastrl assess` saves them now
+    r_star, v_star = ceilings["reward"], ceilings["value"]
     cols = {k: [] for k in WAYS}
     labels = []
     for scores, obs in replayed(scorer, run.parents[2] / "cohort"):

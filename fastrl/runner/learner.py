@@ -53,9 +53,14 @@ class Learner:
     console: Console | None = None
 
     @property
+    def adversarial(self) -> BaseCallback | None:
+        """The callback that fits the discriminator (the first), None without one."""
+        return self.callbacks[0] if self.disc is not None else None
+
+    @property
     def parts(self) -> dict:
         """Extra state saved in checkpoints: the discriminator and its optimizer, the reward's snapshots."""
-        parts = {"discriminator": self.callbacks[0].fit} if self.disc is not None else {}
+        parts = {"discriminator": self.adversarial.fit} if self.adversarial else {}
         return parts | ({"reward_average": self.averaging} if self.averaging is not None else {})
 
     @property
@@ -66,11 +71,11 @@ class Learner:
     @property
     def demonstrated(self) -> Transitions | None:
         """The demonstrations' transitions the discriminator learns from; None without one."""
-        return self.callbacks[0].expert if self.disc is not None else None
+        return self.adversarial.expert if self.adversarial else None
 
     def stats(self) -> dict[str, float]:
         """The latest discriminator statistics, for the training curves."""
-        return dict(self.callbacks[0].stats) if self.disc is not None else {}
+        return dict(self.adversarial.stats) if self.adversarial else {}
 
     def learn(self, timesteps: int, monitor: BaseCallback) -> None:
         """Train for `timesteps` more steps (behavioural cloning: fit the demonstrations once; a cloned generator
