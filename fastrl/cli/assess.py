@@ -19,7 +19,9 @@ def assess_cohort(
     ],
     spec: Annotated[Path, typer.Option("--spec", metavar="SPEC", help="the task the recordings were made in")],
     top: Annotated[int, typer.Option("--top", metavar="K", help="learn from the K best recordings")] = 10,
-    by: Annotated[str, typer.Option(help="rank by heuristic, length (path) or time")] = "heuristic",
+    by: Annotated[
+        str | None, typer.Option(help="rank by time (the stopwatch; the default), length (path) or heuristic")
+    ] = None,
     algorithm: Annotated[str, typer.Option(help="airl or gail")] = "airl",
     seeds: Annotated[
         int, typer.Option(help="learn N scorers (train.seed and the next ones): mean, spread and agreement")
@@ -37,7 +39,7 @@ def assess_cohort(
     from ..agents.sb3 import CheckpointMismatch
     from ..atomic import DiskFull
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
-    from ..runner.protocol import run_protocol
+    from ..runner.protocol import DEFAULT_BY, run_protocol
     from ..spec import SpecError
     from .score import print_report
     from .stops import report_stop
@@ -47,7 +49,7 @@ def assess_cohort(
             inputs,
             spec,
             top,
-            by,
+            by or DEFAULT_BY,
             algorithm,
             list(set_ or []),
             runs,
