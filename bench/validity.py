@@ -90,14 +90,15 @@ def measure(task: str, family: str, seed: int, root: Path, sets: tuple[str, ...]
         "seed": seed,
         "sets": list(sets),
         "tau_b": taus,
+        "chosen_level": sum(c["skill"] for c in done.chosen) / len(done.chosen),  # whom it learned from (5: experts)
         "seconds": time.perf_counter() - t0,
     }
 
 
 def table(rows: list[dict]) -> str:
     """Markdown table: one row per task, family and seed; a learned score in bold where it ties or beats the clock."""
-    head = "| task | family | seed | " + " | ".join(SCORES) + " | wall |"
-    lines = [head, "|" + "---|" * (len(SCORES) + 4)]
+    head = "| task | family | seed | " + " | ".join(SCORES) + " | level learned from | wall |"
+    lines = [head, "|" + "---|" * (len(SCORES) + 5)]
     for r in rows:
         t = r["tau_b"]
         simple = max(t.get("time") or -1, t.get("path_length") or -1)
@@ -106,9 +107,9 @@ def table(rows: list[dict]) -> str:
             v = t.get(k)
             text = "-" if v is None else f"{v:.2f}"
             cells.append(f"**{text}**" if k in ("reward", "value") and v is not None and v >= simple else text)
-        lines.append(
-            f"| {r['task']} | {r['family']} | {r['seed']} | " + " | ".join(cells) + f" | {r['seconds']:.0f} s |"
-        )
+        level = f"{r['chosen_level']:.1f}" if "chosen_level" in r else "-"
+        row = [r["task"], r["family"], str(r["seed"]), *cells, level, f"{r['seconds']:.0f} s"]
+        lines.append("| " + " | ".join(row) + " |")
     return "\n".join(lines)
 
 
