@@ -26,7 +26,8 @@ BY = {
     "length": "subtasks completed (more first), then camera path length (shorter first)",
     "heuristic": "the spec's heuristic return (higher first)",
 }
-# the stopwatch chooses the cleanest best 10 on every trainee family (RESULTS: validity, "Who is learned from")
+# the stopwatch chose the cleanest best 10, on average over the trainee families of three tasks (RESULTS: validity,
+# "Whom the protocol learns from")
 DEFAULT_BY = "time"
 ALGORITHMS = ("airl", "gail")
 # the learned policy's final evaluation: no scripted expert beside it (nothing on this path consults one) and
