@@ -246,15 +246,15 @@ class Checkpoints(BaseCallback):
 
 
 class StopAtSubtasks(BaseCallback):
-    """Stop training once an evaluation's subtask share reaches `at`."""
+    """Stop training once an evaluation's subtask share reaches `at`, not before `after` timesteps."""
 
-    def __init__(self, *, evaluation: PeriodicEvaluation, at: float):
+    def __init__(self, *, evaluation: PeriodicEvaluation, at: float, after: int = 0):
         super().__init__()
-        self.evaluation, self.at = evaluation, at
+        self.evaluation, self.at, self.after = evaluation, at, after
         self.stopped_early = False
 
     def _on_step(self) -> bool:
-        if self.evaluation.latest.get("eval/subtasks", 0.0) >= self.at:
+        if self.num_timesteps >= self.after and self.evaluation.latest.get("eval/subtasks", 0.0) >= self.at:
             self.stopped_early = True
         return not self.stopped_early
 

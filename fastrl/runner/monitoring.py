@@ -7,6 +7,7 @@ from pathlib import Path
 from ..agents.sb3 import batch_policy
 from ..env.fast_env import FastEnv
 from ..log import RunRecorder
+from ..spec.irl import min_steps
 from ..spec.models import TaskSpec
 from .evaluate import evaluate_batched
 from .monitor import (
@@ -47,8 +48,10 @@ def training_monitor(
         parts=learner.parts,
         before_save=recorder.flush,
     )
-    stop_at = spec.evaluate.stop_at_subtasks
-    stop = [StopAtSubtasks(evaluation=evaluation, at=stop_at)] if evaluation and stop_at is not None else []
+    stop_at, after = spec.evaluate.stop_at_subtasks, min_steps(spec.train, spec.irl)
+    stop = []
+    if evaluation and stop_at is not None:
+        stop = [StopAtSubtasks(evaluation=evaluation, at=stop_at, after=after)]
     return TrainingMonitor([tally, bar, *([evaluation] if evaluation else []), points, checkpoints, *stop])
 
 

@@ -131,6 +131,13 @@ class Generator(Strict):
         description="with `cloned`: minibatches of behavioural cloning on the demonstrations after every PPO update "
         "(as DAPG), so the adversarial reward cannot lead the clone away from the task; 0: none",
     )
+    min_steps: int = Field(
+        0,
+        ge=0,
+        description="steps the PPO generator trains before an evaluation may stop it (evaluate.stop_at_subtasks): "
+        "its critic is the learned value that scores trainees, and an anchored clone that completes the task at the "
+        "first evaluations left it too few (RESULTS: validity); 0: any evaluation may stop it",
+    )
     late_starts: float = Field(
         0.0,
         ge=0,
@@ -179,6 +186,12 @@ def starts_cloned(train: Train, irl: IRL) -> bool:
     """Whether the run's PPO generator starts from the demonstrations' behavioural clone (`irl.generator.cloned`)."""
     gen = ppo_generator(train, irl)
     return gen is not None and gen.cloned
+
+
+def min_steps(train: Train, irl: IRL) -> int:
+    """Steps the PPO generator trains before an evaluation may stop it (`irl.generator.min_steps`; 0 otherwise)."""
+    gen = ppo_generator(train, irl)
+    return gen.min_steps if gen is not None else 0
 
 
 def late_starts(train: Train, irl: IRL) -> float:

@@ -15,6 +15,7 @@ from fastrl.runner.monitor import (
     TrainingMonitor,
 )
 from fastrl.spec import load_spec
+from fastrl.spec.irl import min_steps
 
 from ..conftest import spec_file
 
@@ -57,3 +58,22 @@ def test_evaluations_during_training_are_logged_and_can_stop_it(tmp_path):
     assert all(r["irl/disc_accuracy"] == 0.75 for r in rows)
     saved = sorted((tmp_path / "checkpoints").glob("*/parts.pt"))
     assert saved and torch.load(saved[0], weights_only=True)["disc"]["w"].item() == 3.0
+
+
+def test_no_stop_before_the_generators_least_steps(tmp_path):
+    spec = load_spec(spec_file("tracelines"), TINY)
+    model = build_model(spec, make_vec_env(spec, 2, 0))
+    calls = []
+
+    def evaluator():
+        calls.append(model.num_timesteps)
+        return {"eval/subtasks": 1.0}  # every evaluation would stop it
+
+    evaluation = PeriodicEvaluation(evaluator=evaluator, every=128)
+    stop = StopAtSubtasks(evaluation=evaluation, at=0.9, after=512)
+    monitor = TrainingMonitor([EpisodeTally(feature_names=list(spec.reward.features)), evaluation, stop])
+    model.learn(4096, callback=monitor)
+    assert monitor.stopped_early and 512 <= model.num_timesteps < 4096
+    assert calls[0] < 512  # an evaluation came earlier and did not stop it
+    shipped = load_spec(spec_file("tracelines"), ["irl.algorithm=airl"])
+    assert min_steps(shipped.train, shipped.irl) == 200_000 and min_steps(spec.train, spec.irl) == 0
