@@ -31,8 +31,8 @@ EXTRA = (  # (spec, label, overrides): other action modes, and the avatar jitter
     ("imagecentring", "continuous", ["actions.mode=continuous"]),
     ("tracelines", "rates", ["actions.mode=rates"]),
     ("triangulation", "rates", ["actions.mode=rates"]),
-    ("imagecentring", "jitter", ["task.jitter=[0.01,8]"]),
-    ("triangulation", "jitter", ["task.jitter=[0.01,8]"]),
+    ("imagecentring", "jitter", ["episode.resets.avatar_jitter={plate: 0.01, dome: 8}"]),
+    ("triangulation", "jitter", ["episode.resets.avatar_jitter={plate: 0.01, dome: 8}"]),
 )
 
 

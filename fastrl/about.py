@@ -5,7 +5,7 @@ from __future__ import annotations
 from importlib import metadata
 
 DISTRIBUTION = "fastrl-surgery"  # pyproject's `name`; PyPI's `fastrl` is an unrelated project that imports as fastrl
-VERSION = "0.2.0"  # pyproject's `version`: what a source tree without installed metadata reports
+VERSION = "0.3.0"  # pyproject's `version`: what a source tree without installed metadata reports
 
 
 def installed_version() -> str | None:

@@ -6,14 +6,12 @@ error travels in every trajectory's meta."""
 
 from __future__ import annotations
 
-import hashlib
-import json
 from pathlib import Path
 
 import numpy as np
 from scipy.signal import savgol_filter
 
-from ..spec import task_hash
+from ..spec import task_hash, world_hash
 from ..spec.models import TaskSpec
 from .cache import cache_dir
 from .pose_net import VERSION, PoseEstimator, fit, load, save
@@ -23,13 +21,6 @@ from .video_import import endoscope_size, import_video
 EPISODES = 120  # labelled episodes (about 15,000 frames) an estimator learns from
 EPOCHS = 20
 SMOOTH_S = 0.25  # the estimates are smoothed over this window (a quadratic Savitzky-Golay filter)
-
-
-def world_hash(spec: TaskSpec) -> str:
-    """SHA-256 of what the endoscope shows: the task's world without its cue's tolerances (16 hex digits)."""
-    world = spec.model_dump(mode="json", include={"scene", "scope", "task", "instruments"})
-    world["task"].pop("cue", None)
-    return hashlib.sha256(json.dumps(world, sort_keys=True, separators=(",", ":")).encode()).hexdigest()[:16]
 
 
 def estimator_name(spec: TaskSpec) -> str:

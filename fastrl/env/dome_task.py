@@ -1,29 +1,26 @@
-"""The dome tasks (ImageCentring, Periscoping, TraceLines): avatars on the dome or the plate, moved by the jitter."""
+"""The dome tasks (ImageCentring, Periscoping, TraceLines): avatars on the dome or the plate, moved by the resets."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from ..spec import geometry as geo
+from ..terms import EpisodeStart
 from .task import Task
 
 
 class DomeTask(Task):
-    """The scope's cue machine over the avatars of a FAST dome; each episode moves them by the spec's jitter."""
+    """The scope's cue machine over the avatars of a FAST dome, placed where the episode's start puts them."""
 
-    def episode_targets(self, rng: np.random.Generator) -> None:
-        """The spec's avatars, each moved on its surface by up to the jitter (plate: m, dome: degrees)."""
-        super().episode_targets(rng)
-        spec, t = self.compiled.spec, self.compiled.targets
-        jm, jd = spec.task.jitter
-        if jm == 0 and jd == 0:
+    def episode_targets(self, start: EpisodeStart) -> None:
+        """The avatars where the reset terms put them on their surfaces (the spec's, if they moved none)."""
+        super().episode_targets(start)
+        t, m = self.compiled.targets, self.model
+        if np.array_equal(start.at, t.at):
             return
-        r, m = spec.scene.radius, self.model
+        r = self.compiled.spec.scene.radius
         for i in range(len(t)):
-            noise = rng.uniform(-1.0, 1.0, 2)
-            surface = "plate" if t.on_plate[i] else "dome"
-            at = t.at[i] + noise * (jm if t.on_plate[i] else jd)
-            pos, fwd, up = geo.avatar_pose(r, surface, at, t.heading[i])
+            pos, fwd, up = geo.avatar_pose(r, "plate" if t.on_plate[i] else "dome", start.at[i], t.heading[i])
             self.t_pos[i], self.t_fwd[i], self.t_up[i] = pos, fwd, up
             self.t_quat[i] = geo.mat_to_quat(geo.avatar_rotation(fwd, up))
             disk, mark = self.compiled.avatar_geoms[i]

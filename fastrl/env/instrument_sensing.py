@@ -104,14 +104,22 @@ def place_instrument_joints(task: CompiledTask, data: mujoco.MjData, q: np.ndarr
     return np.concatenate(out)
 
 
-def instrument_start(task: CompiledTask, rng: np.random.Generator) -> np.ndarray:
-    """Every instrument's start coordinates plus their uniform noise."""
+def instrument_start(task: CompiledTask) -> list[np.ndarray]:
+    """Every instrument's start pitch, yaw, insertion and roll (rad, m), as the spec gives them."""
     out = []
     for t in task.instruments:
         st = t.spec.start
-        q = np.array([math.radians(st.pitch_deg), math.radians(st.yaw_deg), st.insertion, math.radians(st.roll_deg)])
-        noise = np.array(st.noise) * np.array([math.pi / 180, math.pi / 180, 1.0, math.pi / 180])
-        out.append(q + rng.uniform(-1.0, 1.0, 4) * noise)
+        out.append(
+            np.array([math.radians(st.pitch_deg), math.radians(st.yaw_deg), st.insertion, math.radians(st.roll_deg)])
+        )
+    return out
+
+
+def with_jaws(task: CompiledTask, portal: list[np.ndarray]) -> np.ndarray:
+    """Every instrument's coordinates: its portal coordinates, then a grasper's start jaw."""
+    out = []
+    for t, q in zip(task.instruments, portal):
+        out.append(q)
         if t.spec.kind == "grasper":
-            out.append([math.radians(st.jaw_deg)])
+            out.append([math.radians(t.spec.start.jaw_deg)])
     return np.concatenate(out)

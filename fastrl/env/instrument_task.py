@@ -5,10 +5,11 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from ..terms import EpisodeStart
 from ..terms.state import InstrumentState
 from .dome_task import DomeTask
 from .instrument_actions import InstrumentActions
-from .instrument_sensing import InstrumentSensor, instrument_start, place_instrument_joints
+from .instrument_sensing import InstrumentSensor, instrument_start, place_instrument_joints, with_jaws
 
 
 class InstrumentTask(DomeTask):
@@ -25,11 +26,18 @@ class InstrumentTask(DomeTask):
         cfg = self.compiled.spec.actions
         return InstrumentActions(super().make_actions(), cfg, self.compiled.instruments, self.dt)
 
-    def place_start(self, rng: np.random.Generator, options: dict, q: np.ndarray) -> None:
-        """The scope, then the instruments at their start (options may give it) plus their noise."""
-        super().place_start(rng, options, q)
-        tq = options.get("instruments")
-        self.place_instruments(instrument_start(self.compiled, rng) if tq is None else np.asarray(tq, float))
+    def episode_start(self, options: dict) -> EpisodeStart:
+        """The scope's start, and the instruments' as the spec gives them (None where the options do)."""
+        start = super().episode_start(options)
+        start.instruments = None if options.get("instruments") is not None else instrument_start(self.compiled)
+        return start
+
+    def place_start(self, start: EpisodeStart, options: dict) -> None:
+        """The scope, then the instruments at their start (the options' coordinates, where they give them)."""
+        super().place_start(start, options)
+        given = start.instruments is None
+        q = np.asarray(options["instruments"], float) if given else with_jaws(self.compiled, start.instruments)
+        self.place_instruments(q)
 
     def sense(self, first: bool) -> None:
         """Read the scope, then the instruments."""

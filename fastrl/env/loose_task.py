@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 
 from ..model.compiler import CompiledTask
+from ..terms import EpisodeStart
 from ..terms.state import TaskState
 from .instrument_task import InstrumentTask
 
@@ -116,10 +117,10 @@ class LooseBodiesTask(InstrumentTask):
         super().__init__(**kwargs)
         self.loose = LooseBodies(self.compiled)
 
-    def place_start(self, rng: np.random.Generator, options: dict, q: np.ndarray) -> None:
+    def place_start(self, start: EpisodeStart, options: dict) -> None:
         """Bodies back on their spots (or where options put them), nothing held; the scope and the instruments."""
         self.loose.reset(self.data)
-        super().place_start(rng, options, q)
+        super().place_start(start, options)
         if options.get("bodies") is not None:
             self.loose.place(self.data, options["bodies"])
             mujoco.mj_forward(self.model, self.data)

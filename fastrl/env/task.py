@@ -3,25 +3,27 @@
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import mujoco
 import numpy as np
 
 from ..model.compiler import CompiledTask
+from ..terms import RESET_TERMS, TERMINATION_TERMS, EpisodeStart
 from ..terms.state import TaskState
 from .actions import ContinuousActions, DiscreteActions, RateActions
 from .cues import cue_checks, cue_green, update_dwell
 from .sensing import Sensor
 
 ACTIVE, GREEN, DONE, HIDDEN = (1.0, 0.55, 0.1, 1.0), (0.1, 0.85, 0.2, 1.0), (0.3, 0.5, 1.0, 0.6), (0, 0, 0, 0)
-DEG = math.pi / 180
 
 
 class Task:
     """The scope through its portal viewing each target in turn; the families add to it. Fills its own `state`.
 
-    An episode: `initialize_episode`, then per step `before_step` (servo targets), the physics (the env's),
-    `after_step` (sense, cue), the reward (the env's, from `state`) and `get_termination` (the next subtask).
+    An episode: `initialize_episode` (the spec's start changed by its reset terms), then per step `before_step`
+    (servo targets), the physics (the env's), `after_step` (sense, cue), the reward (the env's, from `state`) and
+    `get_termination` (the next subtask, then the spec's termination terms).
     """
 
     State = TaskState
@@ -43,6 +45,11 @@ class Task:
         self.t_pos, self.t_fwd, self.t_up, self.t_quat = t.pos.copy(), t.fwd.copy(), t.up.copy(), t.quat.copy()
         self.target = [0.0] * self.model.nu  # servo targets: the scope's 5 coordinates, then the instruments'
         self.done_count, self.elapsed, self.was_green, self.positions_only = 0, 0.0, False, False
+        declared = spec.episode
+        self.resets = [
+            _bound(term, declared.resets[name]) for name, term in RESET_TERMS.items() if name in declared.resets
+        ]
+        self.terminations = [_bound(TERMINATION_TERMS[name], params) for name, params in declared.terminations.items()]
 
     def make_actions(self):
         """The scope's actions in the spec's mode."""
@@ -55,36 +62,52 @@ class Task:
 
     # ---- an episode ----------------------------------------------------------------------
     def initialize_episode(self, rng: np.random.Generator, options: dict) -> None:
-        """Targets, start pose (options may give it), cue state; the state read at the start pose."""
-        self.episode_targets(rng)
-        q0 = options.get("portal")
+        """The spec's start changed by its reset terms (options may give poses), placed; cue and state read there."""
+        start = self.episode_start(options)
+        for apply in self.resets:
+            apply(start, rng)
+        self.episode_targets(start)
         self.done_count, self.elapsed = 0, 0.0
-        self.place_start(rng, options, self.start_pose(rng) if q0 is None else np.asarray(q0, float))
+        self.place_start(start, options)
         self.actions.reset(self.data, self.compiled.qadr)
         s = self.state
         s.time, s.dwell, s.prev_dwell, s.dwell_best, s.potential = 0.0, 0.0, 0.0, 0.0, 0.0
+        s.subtasks_done = 0
         self.select(0)
         self.sense(first=True)
         s.green = cue_green(s)
         s.completed = False
         self.paint()
 
-    def episode_targets(self, rng: np.random.Generator) -> None:
-        """This episode's target poses: the spec's (a family that moves them overrides this)."""
+    def episode_start(self, options: dict) -> EpisodeStart:
+        """The spec's start before the reset terms: avatars where the spec puts them, the scope at its start pose."""
+        t = self.compiled.targets
+        given = options.get("portal") is not None
+        return EpisodeStart(
+            at=t.at.copy(), on_plate=t.on_plate, scope=None if given else self.start_pose(), instruments=None
+        )
+
+    def episode_targets(self, start: EpisodeStart) -> None:
+        """This episode's target poses: the spec's (a family whose targets move overrides this)."""
         t = self.compiled.targets
         self.t_pos[:], self.t_fwd[:], self.t_up[:], self.t_quat[:] = t.pos, t.fwd, t.up, t.quat
 
-    def start_pose(self, rng: np.random.Generator) -> np.ndarray:
-        """The spec's start pose plus its uniform noise."""
+    def start_pose(self) -> np.ndarray:
+        """The spec's start pose of the scope."""
         st = self.compiled.spec.scope.start
-        angles = [math.radians(a) for a in (st.pitch_deg, st.yaw_deg, st.roll_deg, st.cable_deg)]
-        q = np.array([angles[0], angles[1], st.insertion, angles[2], angles[3]])
-        noise = np.array(st.noise) * np.array([DEG, DEG, 1.0, DEG, DEG])
-        return q + rng.uniform(-1.0, 1.0, 5) * noise
+        return np.array(
+            [
+                math.radians(st.pitch_deg),
+                math.radians(st.yaw_deg),
+                st.insertion,
+                math.radians(st.roll_deg),
+                math.radians(st.cable_deg),
+            ]
+        )
 
-    def place_start(self, rng: np.random.Generator, options: dict, q: np.ndarray) -> None:
-        """Put the scope (and what a family adds) at its start."""
-        self.place(q)
+    def place_start(self, start: EpisodeStart, options: dict) -> None:
+        """Put the scope (and what a family adds) at its start (the options' pose, where they give one)."""
+        self.place(np.asarray(options["portal"], float) if start.scope is None else start.scope)
 
     def before_step(self, action) -> None:
         """Servo targets and controls for an action (after a replayed pose, complete it first)."""
@@ -102,22 +125,27 @@ class Task:
         self.elapsed = update_dwell(self.state, self.elapsed, self.dt)
 
     def get_termination(self) -> bool:
-        """After the reward: on a completed subtask move to the next target; True once there is none."""
+        """After the reward: the cue moves on to the next target; then whether a declared termination holds."""
+        self.next_subtask()
+        s = self.state
+        return any(term(s) for term in self.terminations)
+
+    def next_subtask(self) -> None:
+        """On a completed subtask make the next target current (none after the last); repaint where the cue changed."""
         s = self.state
         if not s.completed:
             if s.green != self.was_green:
                 self.paint()
-            return False
+            return
         self.done_count += 1
+        s.subtasks_done = self.done_count
         self.elapsed = 0.0
-        terminated = self.done_count >= len(self.t_pos)
-        if not terminated:
+        if self.done_count < len(self.t_pos):
             self.select(self.done_count)
             self.retarget()
             s.dwell = s.prev_dwell = s.dwell_best = 0.0
             s.green = cue_green(s)
         self.paint()
-        return terminated
 
     def cue(self) -> dict:
         """The cue as the info reports it."""
@@ -188,3 +216,8 @@ class Task:
     def poses(self) -> tuple[np.ndarray, ...]:
         """This episode's target poses: positions, forward and up vectors, quaternions."""
         return self.t_pos, self.t_fwd, self.t_up, self.t_quat
+
+
+def _bound(term, params: dict):
+    """A term's function with the spec's parameters bound (the bare function where there are none)."""
+    return partial(term.fn, **params) if params else term.fn

@@ -6,7 +6,8 @@ import os
 from pathlib import Path
 
 from ..bundled import find_spec, missing_spec_message
-from .defaults import canonical_dump, drop_unused_extensions
+from .defaults import canonical_dump
+from .hashes import task_hash, world_hash
 from .loader import SpecError, SpecIssue, apply_overrides, load_model, read_yaml
 from .models import Avatar, Cue, DomeScene, Line, Portal, Scope, Task, TaskSpec
 
@@ -33,15 +34,6 @@ def spec_hash(spec: TaskSpec) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def task_hash(spec: TaskSpec) -> str:
-    """SHA-256 of what a trajectory's replay depends on: scene, scope, task and episode (16 hex digits)."""
-    world = drop_unused_extensions(
-        spec.model_dump(mode="json", include={"scene", "scope", "task", "episode", "instruments"})
-    )
-    text = json.dumps(world, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
-
-
 def json_schema() -> dict:
     """JSON Schema of a task spec, for editors."""
     return TaskSpec.model_json_schema()
@@ -65,4 +57,5 @@ __all__ = [
     "read_yaml",
     "spec_hash",
     "task_hash",
+    "world_hash",
 ]

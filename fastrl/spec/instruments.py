@@ -18,9 +18,6 @@ class InstrumentStart(Strict):
     insertion: float = 0.03
     roll_deg: float = 0.0
     jaw_deg: float = Field(0.0, ge=0, description="grasper: initial jaw opening (deg)")
-    noise: tuple[float, float, float, float] = Field(
-        (0.0, 0.0, 0.0, 0.0), description="uniform +- noise per coordinate at reset (deg, deg, m, deg)"
-    )
 
 
 class Instrument(Shaft):

@@ -11,10 +11,11 @@ from . import geometry as geo
 from .anatomy import landmark_pose
 from .base import NonNeg, Pos, Strict, _fail, _raise
 from .defaults import resolve_defaults
+from .episode import Episode, episode_term_errors
 from .experiment import Experiment
 from .instruments import Instrument, instrument_errors
 from .irl import IRL, late_starts, learning_train, starts_cloned
-from .limits import MAX_EPISODE_STEPS, MAX_LINE_POINTS, MAX_REPLAY_GB, MAX_SECONDS, MAX_SUBTASKS
+from .limits import MAX_LINE_POINTS, MAX_REPLAY_GB, MAX_SUBTASKS
 from .loose import Cup, LooseBody, loose_errors
 from .reach import avatar_problem, portal_point, reach_problem
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
@@ -31,9 +32,6 @@ class StartPose(Strict):
     insertion: float = 0.03
     roll_deg: float = 0.0
     cable_deg: float = 0.0
-    noise: tuple[float, float, float, float, float] = Field(
-        (0.0, 0.0, 0.0, 0.0, 0.0), description="uniform +- noise per coordinate at reset (deg, deg, m, deg, deg)"
-    )
 
 
 class Scope(Shaft):
@@ -106,9 +104,6 @@ class Task(Strict):
     bodies: list[LooseBody] = Field([], max_length=MAX_SUBTASKS, description="loose_bodies: what to grasp")
     cup: Cup | None = Field(None, description="loose_bodies: where to drop them")
     cue: Cue = Cue()
-    jitter: tuple[NonNeg, NonNeg] = Field(
-        (0.0, 0.0), description="random avatar offset at reset: metres on the plate, degrees on the dome"
-    )
 
     @model_validator(mode="after")
     def _targets(self):
@@ -122,33 +117,10 @@ class Task(Strict):
         if self.kind == "liver_tour":
             if not self.landmarks:
                 raise ValueError("liver_tour needs at least one landmark")
-            if self.avatars or self.line is not None or any(self.jitter):
-                raise ValueError("liver_tour has landmarks fixed to the anatomy: no avatars, line or jitter")
+            if self.avatars or self.line is not None:
+                raise ValueError("liver_tour has landmarks fixed to the anatomy: no avatars or line")
         elif self.kind not in ("trace_lines", "loose_bodies") and not self.avatars:
             raise ValueError(f"{self.kind} needs at least one avatar")
-        return self
-
-
-class Episode(Strict):
-    """Control rate, physics substeps and time limit."""
-
-    control_hz: float = Field(20.0, ge=1, le=1000)
-    substeps: int = Field(25, ge=1, le=200)
-    time_limit: Pos = 60.0
-
-    @model_validator(mode="after")
-    def _steps(self):
-        steps = round(self.time_limit * self.control_hz)
-        if steps < 1:
-            step = 1 / self.control_hz
-            _fail("time_limit", f"time limit {self.time_limit:g} s is shorter than one control step ({step:g} s)")
-        if self.time_limit > MAX_SECONDS:
-            _fail("time_limit", f"time limit {self.time_limit:g} s is more than a day ({MAX_SECONDS:,} s)")
-        if steps > MAX_EPISODE_STEPS:
-            _fail(
-                "time_limit",
-                f"time limit {self.time_limit:g} s is {steps:,} control steps, at most {MAX_EPISODE_STEPS:,} allowed",
-            )
         return self
 
 
@@ -250,6 +222,7 @@ class TaskSpec(Strict):
         anatomy = getattr(self.scene, "anatomy", {})
         if self.task.kind == "liver_tour" and self.scene.kind != "abdomen":
             errors.append((("task", "kind"), "liver_tour needs scene.kind: abdomen", self.task.kind))
+        errors += episode_term_errors(self)
         for i, lm in enumerate(self.task.landmarks):
             if lm.organ not in anatomy:
                 errors.append(

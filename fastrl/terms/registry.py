@@ -1,4 +1,4 @@
-"""Name -> pure function registries for reward features and observation terms."""
+"""Name -> function registries for reward features, observation terms, and reset and termination terms."""
 
 from __future__ import annotations
 
@@ -46,9 +46,9 @@ class Term:
 class Registry(dict):
     """A dict of Terms with a decorator to add to it."""
 
-    def __init__(self, kind: str):
+    def __init__(self, kind: str, leading: int = 1):
         super().__init__()
-        self.kind = kind
+        self.kind, self.leading = kind, leading  # leading: the arguments every term takes before its parameters
 
     def register(
         self,
@@ -59,10 +59,10 @@ class Registry(dict):
         per: str = "",
         domains: dict[str, Domain] | None = None,
     ):
-        """Register `fn` under its own name; the first argument is the task state, every other one needs a domain."""
+        """Register `fn` under its own name; its parameters after the first (two for a reset) each need a domain."""
 
         def add(f):
-            sig = {p.name: p for p in list(inspect.signature(f).parameters.values())[1:]}
+            sig = {p.name: p for p in list(inspect.signature(f).parameters.values())[self.leading :]}
             given = dict(domains or {})
             if set(given) != set(sig):  # a programming error: caught at import, by every test
                 raise TypeError(f"{f.__name__}: domains {sorted(given)} do not match its parameters {sorted(sig)}")
@@ -78,3 +78,5 @@ class Registry(dict):
 
 REWARD_FEATURES = Registry("reward feature")
 OBSERVATION_TERMS = Registry("observation term")
+RESET_TERMS = Registry("reset term", leading=2)  # (an EpisodeStart, its random generator, params)
+TERMINATION_TERMS = Registry("termination term")

@@ -46,6 +46,7 @@ class TaskState:
         "completed",
         "subtask",
         "subtasks_total",
+        "subtasks_done",
         "contacts",
         "line_deviation",
         "ray_fraction",
@@ -72,7 +73,7 @@ class TaskState:
         self.tol_centring, self.tol_horizon, self.dwell_time = 0.14, 0.26, 0.5
         self.green = self.completed = False
         self.dwell = self.prev_dwell = self.dwell_best = self.dwell_gain = 0.0
-        self.subtask, self.subtasks_total = 0, 1
+        self.subtask, self.subtasks_total, self.subtasks_done = 0, 1, 0
         self.contacts = 0
         self.line_deviation = self.ray_fraction = 0.0
         self.potential = self.prev_potential = 0.0

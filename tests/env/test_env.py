@@ -70,7 +70,7 @@ def test_the_shaft_always_passes_through_the_portal_point(mode):
 
 
 def test_the_tip_is_stopped_by_the_plate():
-    env = fastrl.make(spec_file("imagecentring"), scope={"start": {"noise": [0, 0, 0, 0, 0]}})
+    env = fastrl.make(spec_file("imagecentring"), overrides=["episode.resets={}"])
     u = env.unwrapped
     env.reset(seed=0)
     env.unwrapped.set_portal_coordinates([0.45, 0.0, 0.06, 0.0, 0.0])  # shaft steeply down toward the plate
@@ -187,7 +187,7 @@ def test_bad_actions_raise_and_out_of_range_continuous_actions_are_clipped():
 
 
 def test_rate_actions_move_each_coordinate_at_its_maximum_rate():
-    env = fastrl.make(spec_file("tracelines"), actions={"mode": "rates"}, scope={"start": {"noise": [0, 0, 0, 0, 0]}})
+    env = fastrl.make(spec_file("tracelines"), actions={"mode": "rates"}, overrides=["episode.resets={}"])
     u = env.unwrapped
     c = u.task_spec.actions
     rates = np.radians([c.max_pivot_rate_deg, c.max_pivot_rate_deg, 0, c.max_roll_rate_deg, 0])
