@@ -7,7 +7,7 @@ import numpy as np
 
 from ..spec.anatomy import organ_mesh
 from ..spec.models import AbdomenScene
-from .dome import WORLD_CONAFFINITY, WORLD_CONTYPE, add_shell
+from .dome import WORLD_CONAFFINITY, WORLD_CONTYPE, add_floor, add_shell
 
 WALL_RGBA = (0.86, 0.6, 0.55, 1.0)
 FLOOR_RGBA = (0.6, 0.35, 0.33, 1.0)
@@ -16,16 +16,7 @@ TROCAR_RGBA = (0.2, 0.2, 0.22, 1.0)
 
 def build_abdomen(spec: mujoco.MjSpec, scene: AbdomenScene) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Add posterior wall, abdominal wall, trocars and organs; return {portal: (point, rotation)}."""
-    r = scene.radius
-    spec.worldbody.add_geom(
-        name="posterior_wall",
-        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-        size=[r + 0.03, 0.005],
-        pos=[0, 0, -0.005],
-        rgba=FLOOR_RGBA,
-        contype=WORLD_CONTYPE,
-        conaffinity=WORLD_CONAFFINITY,
-    )
+    add_floor(spec, "posterior_wall", scene.radius, FLOOR_RGBA)
     portals = add_shell(spec, scene, WALL_RGBA, TROCAR_RGBA)
     for name, organ in scene.anatomy.items():
         verts, faces = organ_mesh(organ)

@@ -19,17 +19,21 @@ SHELL_GROUP = 2  # hidden in the outside view
 
 def build_dome(spec: mujoco.MjSpec, scene: DomeScene) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Add plate, shell tiles and portal rims to the world; return {portal: (point, rotation)}."""
-    r = scene.radius
+    add_floor(spec, "plate", scene.radius, PLATE_RGBA)
+    return add_shell(spec, scene, SHELL_RGBA, PORTAL_RGBA)
+
+
+def add_floor(spec: mujoco.MjSpec, name: str, radius: float, rgba) -> None:
+    """The flat disk the shell stands on (the dome's plate, the abdomen's posterior wall), its top at z = 0."""
     spec.worldbody.add_geom(
-        name="plate",
+        name=name,
         type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-        size=[r + 0.03, 0.005],
+        size=[radius + 0.03, 0.005],
         pos=[0, 0, -0.005],
-        rgba=PLATE_RGBA,
+        rgba=rgba,
         contype=WORLD_CONTYPE,
         conaffinity=WORLD_CONAFFINITY,
     )
-    return add_shell(spec, scene, SHELL_RGBA, PORTAL_RGBA)
 
 
 def add_shell(spec: mujoco.MjSpec, scene, shell_rgba, portal_rgba) -> dict[str, tuple[np.ndarray, np.ndarray]]:
