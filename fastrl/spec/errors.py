@@ -15,13 +15,6 @@ from pydantic import BaseModel
 
 from .limits import MAX_INT
 
-MOVED = {  # fields that became declared terms (spec 0.3.0): where they went
-    ("scope", "start", "noise"): "episode.resets.scope_noise",
-    ("instruments", "start", "noise"): "episode.resets.instrument_noise",
-    ("task", "jitter"): "episode.resets.avatar_jitter",
-    ("experiment",): "study",
-}
-
 
 def _flatten(tps) -> list:
     """The concrete types inside Annotated and Union types."""
@@ -85,8 +78,6 @@ def error_message(err: dict, data: Any, path: tuple, model_cls: type[BaseModel])
     if kind == "missing" and loc:
         return f"missing required field {loc[-1]!r}"
     if kind == "extra_forbidden" and loc:
-        if (moved := MOVED.get(tuple(s for s in loc if not isinstance(s, int)))) is not None:
-            return f"unknown field {loc[-1]!r}: since spec 0.3.0 it is {moved}"
         known = {n for m in _models_at(model_cls, loc[:-1]) for n in _fields(m)}
         close = difflib.get_close_matches(str(loc[-1]), sorted(known), n=1)
         return f"unknown field {loc[-1]!r}" + (f" (did you mean {close[0]!r}?)" if close else "")

@@ -17,6 +17,7 @@ from .instruments import Instrument, instrument_errors
 from .irl import IRL, late_starts, learning_train, starts_cloned
 from .limits import MAX_LINE_POINTS, MAX_REPLAY_GB, MAX_SUBTASKS
 from .loose import Cup, LooseBody, loose_errors
+from .migrate import upgraded
 from .reach import avatar_problem, portal_point, reach_problem
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
 from .shaft import Shaft
@@ -249,6 +250,12 @@ class TaskSpec(Strict):
                     errors.append((("task", "line", "points", i), problem, list(xy)))
         _raise(errors)
         return self
+
+    @model_validator(mode="before")
+    @classmethod
+    def _upgrade(cls, data):
+        """A spec written in an earlier layout (a run's spec.yaml, a trajectory's or a dataset's) in today's."""
+        return upgraded(data)
 
     @model_validator(mode="wrap")
     @classmethod

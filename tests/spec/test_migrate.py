@@ -1,0 +1,58 @@
+"""Specs saved in the 0.2 layout (run folders, trajectories and datasets carry them) read as today's specs."""
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+import fastrl
+from fastrl.spec import SpecError, TaskSpec, load_spec, spec_hash, task_hash
+from fastrl.spec.migrate import PORTAL_NOISE
+
+SPECS = Path(fastrl.__file__).parent / "specs"
+CONTEXT = {"base": SPECS}
+
+
+def in_old_layout(data: dict) -> dict:
+    """Spec data written back as 0.2 wrote it: noise in the starts, jitter in the task, no declared resets."""
+    resets = data["episode"].pop("resets", {})
+    data["episode"].pop("terminations", None)
+    scope = resets.get("scope_noise", {})
+    data["scope"]["start"]["noise"] = [scope.get(k, 0.0) for k in PORTAL_NOISE]
+    for instrument in data.get("instruments", []):
+        noise = resets.get("instrument_noise", {})
+        instrument.setdefault("start", {})["noise"] = [noise.get(k, 0.0) for k in PORTAL_NOISE[:4]]
+    jitter = resets.get("avatar_jitter")
+    if jitter:
+        data["task"]["jitter"] = [jitter.get("plate", 0.0), jitter.get("dome", 0.0)]
+    return data
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in SPECS.glob("*.yaml")))
+def test_a_spec_saved_in_the_old_layout_is_the_same_spec(name):
+    today = load_spec(name)
+    old = in_old_layout(yaml.safe_load((SPECS / f"{name}.yaml").read_text()))
+    assert "resets" not in old["episode"] and "noise" in old["scope"]["start"]
+    again = TaskSpec.model_validate(old, context=CONTEXT)
+    assert again == today and spec_hash(again) == spec_hash(today) and task_hash(again) == task_hash(today)
+
+
+def test_old_jitter_and_zero_noise_keep_their_draws():
+    data = in_old_layout(yaml.safe_load((SPECS / "triangulation.yaml").read_text()))
+    data["task"]["jitter"], data["scope"]["start"]["noise"] = [0.01, 8], [0, 0, 0, 0, 0]
+    spec = TaskSpec.model_validate(data, context=CONTEXT)
+    assert spec.episode.resets["avatar_jitter"] == {"plate": 0.01, "dome": 8}
+    assert set(spec.episode.resets["scope_noise"].values()) == {0}  # 0.2 drew it anyway: the draws stay in order
+    assert "instrument_noise" in spec.episode.resets
+
+
+def test_instruments_with_different_old_noise_are_refused_by_field(tmp_path):
+    data = in_old_layout(yaml.safe_load((SPECS / "triangulation.yaml").read_text()))
+    second = dict(data["instruments"][0], name="second", portal="superior")
+    second["start"] = dict(second["start"], noise=[1, 1, 0.0, 1])
+    data["instruments"].append(second)
+    path = tmp_path / "two.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(SpecError) as e:
+        load_spec(path)
+    assert [i.path for i in e.value.errors] == ["instruments.1.start.noise"]
