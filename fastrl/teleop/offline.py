@@ -14,7 +14,8 @@ from ..data.trajectory import Trajectory, TrajectoryError
 from ..env.fast_env import FastEnv
 from ..irl.networks import has_networks, load_networks
 from ..log.attempt import log_attempt
-from ..spec import load_spec, spec_hash
+from ..spec import load_spec, spec_hash, task_hash
+from ..spec.migrate import upgraded
 from ..spec.models import TaskSpec
 
 
@@ -37,12 +38,15 @@ def spec_of_trajectory(traj: Trajectory, spec_path: Path | None = None) -> TaskS
     if spec_path is not None:
         spec = load_spec(spec_path)
     elif "task_spec" in traj.meta:
-        spec = TaskSpec.model_validate(traj.meta["task_spec"])
+        carried = traj.meta["task_spec"]
+        spec = TaskSpec.model_validate(carried)
+        # a spec carried in an earlier layout hashes otherwise once upgraded; its task hash is kept: check that
+        key, ours = ("spec_hash", spec_hash(spec)) if upgraded(carried) is carried else ("task_hash", task_hash(spec))
+        theirs = traj.meta.get(key)
+        if theirs is not None and theirs != ours:
+            raise TrajectoryError(f"the spec carried in the file does not match its {key} {theirs}")
     else:
         raise TrajectoryError("the trajectory does not carry its spec: give --spec SPEC")
-    theirs = traj.meta.get("spec_hash")
-    if theirs is not None and theirs != spec_hash(spec) and spec_path is None:
-        raise TrajectoryError(f"the spec carried in the file does not match its spec_hash {theirs}")
     return spec
 
 

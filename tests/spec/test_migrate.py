@@ -2,6 +2,7 @@
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -56,3 +57,17 @@ def test_instruments_with_different_old_noise_are_refused_by_field(tmp_path):
     with pytest.raises(SpecError) as e:
         load_spec(path)
     assert [i.path for i in e.value.errors] == ["instruments.1.start.noise"]
+
+
+def test_an_attempt_carrying_an_old_layout_spec_is_checked_by_its_task_hash():
+    from fastrl.data.trajectory import Trajectory, TrajectoryError
+    from fastrl.teleop.offline import spec_of_trajectory
+
+    today = load_spec("tracelines")
+    old = in_old_layout(yaml.safe_load((SPECS / "tracelines.yaml").read_text()))
+    meta = {"task_spec": old, "spec_hash": "0123456789abcdef", "task_hash": task_hash(today)}  # 0.2's spec hash
+    attempt = Trajectory(np.array([0.0, 0.05]), np.zeros((2, 5)), meta)
+    assert spec_of_trajectory(attempt) == today
+    attempt.meta["task_hash"] = "fedcba9876543210"
+    with pytest.raises(TrajectoryError, match="task_hash"):
+        spec_of_trajectory(attempt)
