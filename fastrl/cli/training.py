@@ -15,7 +15,7 @@ from . import err, exit_with, out, write_text
 def train_and_report(
     spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool, timesteps: int | None
 ) -> None:
-    """Start (or resume) a run or experiment, turn interruptions and bad input into messages, print the evaluation."""
+    """Start (or resume) a run or study, turn interruptions and bad input into messages, print the evaluation."""
     from ..agents.sb3 import CheckpointDamaged, CheckpointMismatch
     from ..atomic import DiskFull
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
@@ -27,10 +27,10 @@ def train_and_report(
     with stop_on_sigterm(until_exit=True):  # a second Ctrl-C while the run saves is ignored until exit
         try:
             plan = plan_training(spec, overrides, resume)
-            if plan.experiment:
-                from .experiment import experiment_and_report
+            if plan.study:
+                from .study import study_and_report
 
-                return experiment_and_report(plan, runs, progress)
+                return study_and_report(plan, runs, progress)
             run_dir = train(plan, runs, out, progress, timesteps)
         except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
             report_stop(stop)

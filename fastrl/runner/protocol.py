@@ -178,7 +178,7 @@ def run_protocol(
                 *overrides,
                 f"irl.algorithm={algorithm}",
                 f"irl.demonstrations.path={run / 'best'}",
-                "experiment.enabled=false",
+                "study.enabled=false",
                 *([f"train.seed={seed}"] if seeds > 1 else []),
             ],
             console=console,

@@ -16,6 +16,9 @@ from ..spec.models import TaskSpec
 MAX_JSON_BYTES = 64 * 1024 * 1024  # meta.json, eval.json, state.json are kilobytes
 RRD_TRAILER = struct.Struct("<QQI8sI")  # rerun 0.41: footer offset, footer length, checksum, b"RRF2FOOT", version
 RRD_MAGIC = b"RRF2FOOT"
+# A study's Table 3 and its meta.json kind keep the names of runs written when a study was called an experiment.
+STUDY_RESULT = "experiment.json"
+STUDY_KIND = "experiment"
 
 
 @dataclass(frozen=True)

@@ -82,7 +82,7 @@ def run_sweep(sweep: Path, address: str | None = None, console: Console | None =
 
 
 def _fit(sweep: Path, todo: list[dict], cpus: int) -> list[dict]:
-    """One Tune experiment over the given trials, each retried once; the failed ones with their last error line."""
+    """One Tune run over the given trials, each retried once; the failed ones with their last error line."""
     from ray import tune
 
     k = 1 + len(list(sweep.glob("tune-*")))

@@ -1,4 +1,4 @@
-"""The experiment section: the paper's laparoscopic study, run by `fastrl run` instead of one training."""
+"""The study section: the paper's laparoscopic study (Table 3), run by `fastrl run` instead of one training."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ from pydantic import Field, model_validator
 from .base import Strict
 
 
-class Experiment(Strict):
+class Study(Strict):
     """Cohort of graded procedures -> inverse RL on the best by the heuristic -> learned scores vs ground truth."""
 
-    enabled: bool = Field(False, description="`fastrl run` runs this experiment instead of one training")
+    enabled: bool = Field(False, description="`fastrl run` runs this study instead of one training")
     levels: int = Field(5, ge=2, le=20, description="skill levels of the synthetic cohort")
     per_level: int = Field(20, ge=1, le=1000, description="procedures per level")
     seed: int = Field(0, ge=0, description="seed of the first procedure")

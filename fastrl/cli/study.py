@@ -1,4 +1,4 @@
-"""`fastrl run` on a spec with an experiment: run or continue it, print Table 3."""
+"""`fastrl run` on a spec with a study: run or continue it, print Table 3."""
 
 from __future__ import annotations
 
@@ -12,9 +12,10 @@ from ..spec import SpecError
 from . import err, exit_with, out
 
 
-def experiment_and_report(plan, runs: Path, progress: bool) -> None:
-    """Run (or continue) the planned experiment and print its Table 3."""
+def study_and_report(plan, runs: Path, progress: bool) -> None:
+    """Run (or continue) the planned study and print its Table 3."""
     from ..runner import RunInterrupted, RunOutOfSpace
+    from ..runner.runfiles import STUDY_RESULT
     from ..runner.training import train
 
     try:
@@ -36,9 +37,9 @@ def experiment_and_report(plan, runs: Path, progress: bool) -> None:
         raise typer.Exit(code=1) from None
     except (SpecError, FileNotFoundError) as e:
         exit_with(e)
-    print_table3(json.loads((run_dir / "experiment.json").read_text()))
+    print_table3(json.loads((run_dir / STUDY_RESULT).read_text()))
     out.print(
-        f"experiment saved in {escape(str(run_dir))}: experiment.json, table3.png; "
+        f"study saved in {escape(str(run_dir))}: {STUDY_RESULT}, table3.png; "
         f"view it with: rerun {escape(str(run_dir / 'recording.rrd'))}"
     )
 
@@ -47,7 +48,7 @@ def print_table3(result: dict) -> None:
     """Table 3: Spearman's rho (p-value) of learned reward and value against economy and safety."""
     from rich.table import Table
 
-    from ..log.experiment import PANELS
+    from ..log.study import PANELS
 
     def cell(c: dict) -> str:
         return "-" if c["rho"] is None else f"{c['rho']:.2f} ({c['p']:.0e})"

@@ -1,4 +1,4 @@
-"""A synthetic two-handed trainee: the two-handed expert with hesitation pauses and motor slips over both hands."""
+"""A synthetic trainee of tasks with instruments: their expert with hesitation pauses and motor slips on each."""
 
 from __future__ import annotations
 
@@ -11,12 +11,12 @@ from .trainee import paced
 PAUSE_STEPS = 8  # mean length of a hesitation pause beyond its first step
 
 
-class TwoHandTrainee:
+class TwoInstrumentTrainee:
     """A discrete policy with `act(obs)` and `reset()`, deterministic given its seed; a zero profile is the expert.
 
-    Of a SkillProfile it uses the deviations of either hand's actions: `motor_noise` (a random movement instead of
-    the intended one), `hesitation` and `idle` (pauses), `slowness` and `dither`; the scope's own (tremor, delay,
-    overshoot, wander, optics, depth, aim, horizon, detour, bump) do not apply.
+    Of a SkillProfile it uses the deviations of the scope's and the instruments' actions: `motor_noise` (a random
+    movement instead of the intended one), `hesitation` and `idle` (pauses), `slowness` and `dither`; the scope's
+    own (tremor, delay, overshoot, wander, optics, depth, aim, horizon, detour, bump) do not apply.
     """
 
     def __init__(self, env, profile: SkillProfile, seed: int = 0):

@@ -1,4 +1,4 @@
-"""Two hands on screen: the endoscope image shows the probe, the Rerun recording holds both instruments and paths."""
+"""Instruments on screen: the endoscope image shows the probe, the Rerun recording holds both instruments and paths."""
 
 import numpy as np
 import pytest
@@ -46,7 +46,7 @@ def test_recording_holds_each_instrument_and_its_path(tmp_path):
     assert ep.tools.shape == (len(ep.time), 1, 2, 3)
     np.testing.assert_allclose(np.linalg.norm(ep.tools[:, 0, 0] - ep.tools[:, 0, 1], axis=1), 0.16, atol=1e-9)
     path = tmp_path / "r.rrd"
-    with RunRecorder(path, run_name="hands") as rec:
+    with RunRecorder(path, run_name="instruments") as rec:
         rec.log_scene(task)
         rec.log_episode(0, ep, task, fov_deg=task.spec.scope.fov_deg)
     got = list(rc.RrdReader(path).stream().to_chunks())

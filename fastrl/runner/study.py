@@ -1,4 +1,4 @@
-"""The paper's laparoscopic experiment: a graded cohort, inverse RL on its best, learned scores against economy and
+"""The paper's laparoscopic study (Table 3): a graded cohort, inverse RL on its best, learned scores against economy and
 safety."""
 
 from __future__ import annotations
@@ -17,19 +17,20 @@ from ..atomic import write_json
 from ..data.cohort import make_cohort
 from ..data.trajectory import Trajectory, load_files
 from ..irl.networks import has_networks, load_networks
-from ..log.experiment import log_experiment, plot_correlations
+from ..log.study import log_study, plot_correlations
 from ..model.compiler import CompiledTask, compile_task
 from ..model.scope import joint_ranges
 from ..spec import load_spec
 from ..spec.models import TaskSpec
 from .rundir import latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
+from .runfiles import STUDY_KIND, STUDY_RESULT
 from .stops import stop_on_sigterm
 
 METRICS = ("economy", "safety")
 LEARNED = ("reward", "value")
 
 
-def start_experiment(
+def start_study(
     spec_path,
     overrides=(),
     root="runs",
@@ -37,19 +38,19 @@ def start_experiment(
     progress: bool = True,
     task: CompiledTask | None = None,
 ) -> Path:
-    """Run the spec's experiment in a new run directory; return it (`task`: the spec compiled already)."""
+    """Run the spec's study in a new run directory; return it (`task`: the spec compiled already)."""
     if task is None:
         task = compile_task(load_spec(spec_path, overrides))
     spec = task.spec
-    run = new_run_dir(Path(root), spec, label=f"experiment-s{spec.experiment.seed}")
+    run = new_run_dir(Path(root), spec, label=f"study-s{spec.study.seed}")
     write_spec(run, spec, task.xml)
-    write_meta(run, spec, str(spec_path), {"status": "cohort", "overrides": list(overrides), "kind": "experiment"})
-    return run_experiment(run, console or Console(), progress)
+    write_meta(run, spec, str(spec_path), {"status": "cohort", "overrides": list(overrides), "kind": STUDY_KIND})
+    return run_study(run, console or Console(), progress)
 
 
 @stop_on_sigterm()
-def run_experiment(run: Path, console: Console, progress: bool) -> Path:
-    """Run (or continue, stage by stage) the experiment of a run directory: what is done is not redone."""
+def run_study(run: Path, console: Console, progress: bool) -> Path:
+    """Run (or continue, stage by stage) the study of a run directory: what is done is not redone."""
     spec = load_spec(run / "spec.yaml")
     timings = {}
     t0 = time.perf_counter()
@@ -58,11 +59,11 @@ def run_experiment(run: Path, console: Console, progress: bool) -> Path:
     t0 = time.perf_counter()
     heuristic = Scorer(spec)
     scored = _score_all(heuristic, cohort, "heuristic scores", console, progress)
-    best = pick_best(scored, spec.experiment.best)
+    best = pick_best(scored, spec.study.best)
     _copy_best(cohort, best, run / "best")
     timings["heuristic"] = time.perf_counter() - t0
     learned = {}
-    for algo in spec.experiment.algorithms:
+    for algo in spec.study.algorithms:
         update_meta(run, status=f"inverse RL: {algo}")
         t0 = time.perf_counter()
         sub = train_irl(run, algo, console, progress)
@@ -71,19 +72,17 @@ def run_experiment(run: Path, console: Console, progress: bool) -> Path:
         scorer = Scorer(spec, load_networks(sub / "networks"))
         learned[algo] = _score_all(scorer, cohort, f"{algo} scores", console, progress)
         timings[f"score_{algo}"] = time.perf_counter() - t0
-    result = experiment_result(spec, scored, learned, best, timings)
-    write_json(run / "experiment.json", result)
+    result = study_result(spec, scored, learned, best, timings)
+    write_json(run / STUDY_RESULT, result)
     plot_correlations(result, run / "table3.png")
-    log_experiment(
-        run / "recording.rrd", run.name, compile_task(spec), scored, learned, result, figure=run / "table3.png"
-    )
+    log_study(run / "recording.rrd", run.name, compile_task(spec), scored, learned, result, figure=run / "table3.png")
     update_meta(run, status="done", seconds=timings)
     return run
 
 
 def write_cohort(spec: TaskSpec, folder: Path, console: Console, progress: bool) -> list[tuple[str, Trajectory]]:
     """The cohort's trajectories, generated into `folder` unless already there; (name, trajectory) in order."""
-    cfg = spec.experiment
+    cfg = spec.study
     n = cfg.levels * cfg.per_level
     paths = sorted(folder.glob("*.npz"))
     if len(paths) < n:
@@ -127,14 +126,14 @@ def train_irl(run: Path, algo: str, console: Console, progress: bool) -> Path:
         shutil.rmtree(sub)  # started but not one checkpoint written: start again
     spec = load_spec(run / "spec.yaml")
     console.print(
-        f"[bold]{algo.upper()}[/bold] on the {spec.experiment.best} best procedures, "
-        f"{spec.experiment.timesteps:,} generator steps"
+        f"[bold]{algo.upper()}[/bold] on the {spec.study.best} best procedures, "
+        f"{spec.study.timesteps:,} generator steps"
     )
     overrides = [
         f"irl.algorithm={algo}",
         f"irl.demonstrations.path={run / 'best'}",
-        f"train.timesteps={spec.experiment.timesteps}",
-        "experiment.enabled=false",
+        f"train.timesteps={spec.study.timesteps}",
+        "study.enabled=false",
     ]
     return start_run(run / "spec.yaml", overrides, console=console, progress=progress, into=sub)
 
@@ -172,7 +171,7 @@ def correlation(x, y) -> dict:
     return {"rho": float(r.statistic), "p": float(r.pvalue)}
 
 
-def experiment_result(
+def study_result(
     spec: TaskSpec, heuristic: list[TrajectoryScores], learned: dict, best: list[str], timings: dict
 ) -> dict:
     """Table 3 (learned reward and value against economy and safety) and the per-procedure figures."""

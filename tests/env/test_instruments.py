@@ -1,4 +1,4 @@
-"""Two hands: instruments in the spec language, the triangulation task, its expert, actions and checkers."""
+"""Instruments in the spec language, the triangulation task, its expert, actions and checkers."""
 
 import warnings
 
@@ -171,7 +171,7 @@ def test_triangulation_trajectories_keep_the_probe_and_replay_identically(tmp_pa
     assert not infos[-1]["success"]  # the probe stays at its start: the view alone completes nothing
 
 
-def test_a_two_handed_cohort_ranks_by_level():
+def test_a_cohort_with_instruments_ranks_by_level():
     from fastrl.data.cohort import make_cohort, replayed_figures
 
     spec = load_spec(spec_file("triangulation"))
@@ -208,7 +208,7 @@ def test_teleop_tab_switches_to_the_probe_and_the_attempt_keeps_it(tmp_path):
 
 
 @pytest.mark.parametrize("mode", ["discrete", "rates"])
-def test_actions_are_recovered_for_both_hands(mode):
+def test_actions_are_recovered_for_scope_and_instrument(mode):
     from fastrl.data.inverse import ActionRecovery, agreement
     from fastrl.data.replay import rollout_trajectory
     from fastrl.data.trajectory import Trajectory

@@ -1,4 +1,4 @@
-"""The laparoscopic experiment in Rerun and as a PNG: anatomy, paths coloured by learned value, Table 3 plots."""
+"""The laparoscopic study in Rerun and as a PNG: anatomy, paths coloured by learned value, Table 3 plots."""
 
 from __future__ import annotations
 
@@ -78,10 +78,10 @@ def plot_correlations(result: dict, path: Path) -> Path:
     return Path(path)
 
 
-def log_experiment(
+def log_study(
     path: Path, recording_id: str, task: CompiledTask, scored, learned: dict, result: dict, figure: Path | None = None
 ) -> Path:
-    """Write the experiment's .rrd: anatomy, every camera path coloured by learned value, Table 3 plots."""
+    """Write the study's .rrd: anatomy, every camera path coloured by learned value, Table 3 plots."""
     rec = rr.RecordingStream("fastrl", recording_id=recording_id)
     rec.set_log_time_enabled(False)
     rec.save(path)

@@ -1,4 +1,4 @@
-"""The scripted expert of two-handed tasks: the scope's expert for the view, closed-form aiming for the instrument."""
+"""The scripted expert of tasks with instruments: the scope's expert for the view, closed-form aiming for each tool."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ REAIM = 0.01  # the scope's view is solved again once its target moved this far 
 ABOVE_CUP = 0.03  # the grasper lets go this high above the cup's floor (m)
 
 
-class TwoHandExpert:
+class TwoInstrumentExpert:
     """Drives the scope to the view of the current target and the working instrument's tip onto it."""
 
     def __init__(self, env, scope_expert):
