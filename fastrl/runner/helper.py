@@ -4,17 +4,16 @@ process writes the report and draws the distributions."""
 
 from __future__ import annotations
 
-import multiprocessing
 import os
-import signal
 from collections.abc import Callable
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import Future
 from pathlib import Path
 
 from ..assess.journal import Journal, record
 from ..assess.references import compute_expert_paths, references_for
 from ..assess.report import SCORING_ERRORS, problem_text
 from ..assess.scoring import Scorer
+from ..forked import Worker, can_fork, context
 
 MIN_FILES = 16  # below this, forking costs more than it saves
 _SCORER: Scorer | None = None  # the forked worker's copy of the parent's scorer
@@ -23,10 +22,9 @@ _PARENT: int | None = None  # the parent's pid: if it dies (a kill), the worker 
 
 
 def _adopt(scorer: Scorer, counter) -> None:
-    """Worker start: keep the inherited scorer and counter; Ctrl-C is the parent's to handle."""
+    """Worker start (after forked's signal setup: Ctrl-C is the parent's): keep the inherited scorer and counter."""
     global _SCORER, _NEXT, _PARENT
     _SCORER, _NEXT, _PARENT = scorer, counter, os.getppid()
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _prepare(episodes: int, cache: Path | None, pictures: bool) -> tuple:
@@ -128,15 +126,14 @@ class Helper:
     data cross over."""
 
     def __init__(self, scorer: Scorer):
-        fork = multiprocessing.get_context("fork")
         self.scorer = scorer
-        self.counter = fork.Value("q", 0)
-        self.pool = ProcessPoolExecutor(1, mp_context=fork, initializer=_adopt, initargs=(scorer, self.counter))
+        self.counter = context().Value("q", 0)
+        self.pool = Worker(initializer=_adopt, initargs=(scorer, self.counter))
 
     @staticmethod
     def worth_it(n_files: int) -> bool:
         """Whether a second process pays: enough files, and a second core."""
-        return n_files >= MIN_FILES and cores() > 1 and "fork" in multiprocessing.get_all_start_methods()
+        return n_files >= MIN_FILES and cores() > 1 and can_fork()
 
     def prepare(self, episodes: int, cache: Path | None, pictures: bool = False) -> Future:
         """Load (or compute) the references in the worker, and matplotlib if `pictures`; a future of (references,
@@ -167,4 +164,4 @@ class Helper:
         """Stop the worker (pending work is cancelled, no further file is taken)."""
         with self.counter.get_lock():
             self.counter.value = 2**62
-        self.pool.shutdown(wait=True, cancel_futures=True)
+        self.pool.shutdown()
