@@ -15,8 +15,8 @@ from . import err, exit_with, out
 def study_and_report(plan, runs: Path, progress: bool) -> None:
     """Run (or continue) the planned study and print its Table 3."""
     from ..runner import RunInterrupted, RunOutOfSpace
-    from ..runner.runfiles import STUDY_RESULT
-    from ..runner.training import train
+    from ..runner.runs.runfiles import STUDY_RESULT
+    from ..runner.train.training import train
 
     try:
         run_dir = train(plan, runs, out, progress)

@@ -22,9 +22,9 @@ from ..model.compiler import CompiledTask, compile_task
 from ..model.scope import joint_ranges
 from ..spec import load_spec
 from ..spec.models import TaskSpec
-from .rundir import latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
-from .runfiles import STUDY_KIND, STUDY_RESULT
-from .stops import stop_on_sigterm
+from .runs.rundir import latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
+from .runs.runfiles import STUDY_KIND, STUDY_RESULT
+from .runs.stops import stop_on_sigterm
 
 METRICS = ("economy", "safety")
 LEARNED = ("reward", "value")
@@ -115,7 +115,7 @@ def _copy_best(cohort, best: list[str], folder: Path) -> None:
 
 def train_irl(run: Path, algo: str, console: Console, progress: bool) -> Path:
     """Train (or resume, or reuse) inverse RL on the best procedures; return its run directory."""
-    from .run import resume_run, start_run
+    from .train.run import resume_run, start_run
 
     sub = run / algo
     if has_networks(sub / "networks") and (sub / "eval.json").exists():

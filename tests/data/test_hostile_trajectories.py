@@ -19,8 +19,8 @@ import fastrl
 from fastrl.cli import app
 from fastrl.data import Trajectory, TrajectoryError, load_trajectories
 from fastrl.data.replay import expert_trajectories, replay
-from fastrl.runner.learner import demonstrations
 from fastrl.runner.study import write_cohort
+from fastrl.runner.train.learner import demonstrations
 from fastrl.spec import load_spec
 
 from ..conftest import spec_file

@@ -6,7 +6,7 @@ import pytest
 import fastrl
 from fastrl.agents.expert import ScriptedExpert
 from fastrl.log import RunRecorder
-from fastrl.runner.evaluate import record_episode
+from fastrl.runner.train.evaluate import record_episode
 
 from ..conftest import spec_file
 

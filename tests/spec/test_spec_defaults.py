@@ -4,7 +4,7 @@ import pytest
 import yaml
 from pydantic import ValidationError
 
-from fastrl.runner.rundir import write_spec
+from fastrl.runner.runs.rundir import write_spec
 from fastrl.spec import SpecError, TaskSpec, load_spec, spec_hash, task_hash
 
 from ..conftest import spec_file

@@ -13,9 +13,9 @@ from pathlib import Path
 
 from rich.console import Console
 
-from .rundir import latest_checkpoint
-from .runfiles import read_eval
-from .sweep import is_finished, trial_overrides
+from ..runs.rundir import latest_checkpoint
+from ..runs.runfiles import read_eval
+from .plan import is_finished, trial_overrides
 
 
 def run_trial(config: dict) -> None:
@@ -24,7 +24,7 @@ def run_trial(config: dict) -> None:
     import torch
     from ray import tune
 
-    from .run import resume_run, start_run
+    from ..train.run import resume_run, start_run
 
     cpus = int(config["cpus"])
     for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS"):

@@ -7,15 +7,15 @@ from pathlib import Path
 
 from rich.console import Console
 
-from ..agents.expert import ScriptedExpert
-from ..env.fast_env import FastEnv
-from ..log import RunRecorder
-from ..spec import load_spec
-from ..spec.models import TaskSpec
+from ...agents.expert import ScriptedExpert
+from ...env.fast_env import FastEnv
+from ...log import RunRecorder
+from ...spec import load_spec
+from ...spec.models import TaskSpec
+from ..runs.saved import load_policy
+from ..runs.stops import EvaluationInterrupted, signal_name, stop_on_sigterm
 from .beside import Beside
 from .evaluate import evaluate
-from .saved import load_policy
-from .stops import EvaluationInterrupted, signal_name, stop_on_sigterm
 
 
 def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: Console | None) -> dict:

@@ -9,11 +9,11 @@ from collections.abc import Callable
 from concurrent.futures import Future
 from pathlib import Path
 
-from ..assess.journal import Journal, record
-from ..assess.references import compute_expert_paths, references_for
-from ..assess.report import SCORING_ERRORS, problem_text
-from ..assess.scoring import Scorer
-from ..forked import Worker, can_fork, context
+from ...assess.journal import Journal, record
+from ...assess.references import compute_expert_paths, references_for
+from ...assess.report import SCORING_ERRORS, problem_text
+from ...assess.scoring import Scorer
+from ...forked import Worker, can_fork, context
 
 MIN_FILES = 16  # below this, forking costs more than it saves
 _SCORER: Scorer | None = None  # the forked worker's copy of the parent's scorer
@@ -31,8 +31,8 @@ def _prepare(episodes: int, cache: Path | None, pictures: bool) -> tuple:
     """Worker side of `Helper.prepare`."""
     prepared = references_for(_SCORER, episodes, cache)
     if pictures:  # import matplotlib and Rerun now: the files are shared out, so the parent scores more meanwhile
-        from ..assess.figures import _pyplot
-        from ..log import assessment  # noqa: F401
+        from ...assess.figures import _pyplot
+        from ...log import assessment  # noqa: F401
 
         _pyplot()
     return prepared
@@ -58,8 +58,8 @@ def _record(*args) -> Path:
 
 def record_assessment(task, path: Path, recording_id: str, kept: list, report: dict, devs: dict, by: str) -> Path:
     """The assessment's Rerun recording (paths by learned value, deviations, the report's tables)."""
-    from ..assess.figures import group_of
-    from ..log.assessment import log_assessment
+    from ...assess.figures import group_of
+    from ...log.assessment import log_assessment
 
     return log_assessment(path, recording_id, task, kept, report, devs, lambda s: group_of(s, by))
 

@@ -16,9 +16,9 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.vec_env import VecNormalize
 
-from ..agents.sb3 import save_checkpoint
-from ..atomic import append_line
-from .stops import check_space, tree_bytes
+from ...agents.sb3 import save_checkpoint
+from ...atomic import append_line
+from ..runs.stops import check_space, tree_bytes
 
 
 class SessionRate(BaseCallback):

@@ -7,9 +7,9 @@ from pathlib import Path
 
 from rich.console import Console
 
-from ..model.compiler import CompiledTask
-from ..model.loaded import load_task
-from .runfiles import STUDY_KIND, STUDY_RESULT, read_meta
+from ...model.compiler import CompiledTask
+from ...model.loaded import load_task
+from ..runs.runfiles import STUDY_KIND, STUDY_RESULT, read_meta
 
 
 @dataclass(frozen=True)
@@ -39,7 +39,7 @@ def plan_training(spec_path: Path | None, overrides=(), resume: Path | None = No
 def train(plan: Training, runs: Path, console: Console, progress: bool = True, timesteps: int | None = None) -> Path:
     """Start or continue the planned run or study; return its directory."""
     if plan.study:
-        from .study import run_study, start_study
+        from ..study import run_study, start_study
 
         if plan.resume is not None:
             return run_study(plan.resume, console, progress)

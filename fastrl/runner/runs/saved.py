@@ -5,8 +5,8 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-from ..agents.sb3 import build_model, checkpoint_problem, load_checkpoint, make_vec_env, policy_function
-from ..spec.models import TaskSpec
+from ...agents.sb3 import build_model, checkpoint_problem, load_checkpoint, make_vec_env, policy_function
+from ...spec.models import TaskSpec
 from .rundir import latest_checkpoint
 from .runfiles import read_run_spec
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .runfiles import read_eval
-from .sweep import is_finished, read_manifest
+from ..runs.runfiles import read_eval
+from .plan import is_finished, read_manifest
 
 METRICS = {"success": "success_rate", "subtasks": "subtasks_completed", "return": "return_mean"}
 COLUMNS = (*METRICS, "wall_s")

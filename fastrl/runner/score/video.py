@@ -8,14 +8,14 @@ from pathlib import Path
 
 from rich.progress import Progress
 
-from ..assess.scoring import foreign_problem
-from ..data.render_video import write_trajectory_video
-from ..data.trajectory import Trajectory, TrajectoryError
-from ..data.video import VideoError
-from ..data.video_import import endoscope_size, import_video
-from ..env.fast_env import FastEnv
-from ..spec import SpecError, load_spec
-from ..spec.models import TaskSpec
+from ...assess.scoring import foreign_problem
+from ...data.render_video import write_trajectory_video
+from ...data.trajectory import Trajectory, TrajectoryError
+from ...data.video import VideoError
+from ...data.video_import import endoscope_size, import_video
+from ...env.fast_env import FastEnv
+from ...spec import SpecError, load_spec
+from ...spec.models import TaskSpec
 
 VIDEO_SUFFIXES = (".mp4", ".m4v", ".mov", ".mkv", ".avi", ".webm")
 

@@ -12,11 +12,11 @@ from pathlib import Path
 
 import yaml
 
-from ..about import DISTRIBUTION
-from ..agents.sb3 import checkpoint_problem
-from ..atomic import write_json, write_text
-from ..spec import spec_hash
-from ..spec.models import TaskSpec
+from ...about import DISTRIBUTION
+from ...agents.sb3 import checkpoint_problem
+from ...atomic import write_json, write_text
+from ...spec import spec_hash
+from ...spec.models import TaskSpec
 from .runfiles import read_eval, read_meta, read_run_spec, read_state, run_problems
 
 PACKAGES = (DISTRIBUTION, "mujoco", "gymnasium", "stable-baselines3", "torch", "numpy", "pydantic", "rerun-sdk")
@@ -49,7 +49,7 @@ def write_spec(run: Path, spec: TaskSpec, xml: str) -> None:
 
 def git_commit() -> str | None:
     """The source tree's git commit, with '-dirty' if it has uncommitted changes, or None (installed from a wheel)."""
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[3]
     if not (root / "pyproject.toml").is_file():  # site-packages, maybe inside some other project's repository
         return None
     try:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from ..forked import ChildFailed, Worker, can_fork, outcome
+from ...forked import ChildFailed, Worker, can_fork, outcome
 
 __all__ = ["Beside", "ChildFailed"]
 

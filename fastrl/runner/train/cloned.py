@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import warnings
 
-from ..agents.bc import behaviour_clone
-from ..agents.sb3 import batch_policy, build_model, make_vec_env, policy_function
-from ..data.replay import demonstration_pairs
-from ..data.trajectory import Trajectory
-from ..env.fast_env import FastEnv
-from ..spec.models import TaskSpec
+from ...agents.bc import behaviour_clone
+from ...agents.sb3 import batch_policy, build_model, make_vec_env, policy_function
+from ...data.replay import demonstration_pairs
+from ...data.trajectory import Trajectory
+from ...env.fast_env import FastEnv
+from ...spec.models import TaskSpec
 
 
 class ClonedActor:

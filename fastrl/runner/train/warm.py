@@ -8,13 +8,13 @@ from pathlib import Path
 
 from rich.console import Console
 
-from ..agents.anchor import CloneAnchor
-from ..agents.dagger import warm_start
-from ..atomic import append_line
-from ..env.fast_env import FastEnv
-from ..log import RunRecorder
-from ..spec.models import TaskSpec
-from .rundir import update_meta
+from ...agents.anchor import CloneAnchor
+from ...agents.dagger import warm_start
+from ...atomic import append_line
+from ...env.fast_env import FastEnv
+from ...log import RunRecorder
+from ...spec.models import TaskSpec
+from ..runs.rundir import update_meta
 
 SEED_STRIDE = 100_000  # the warm start's episode seeds start at train.seed x this, apart from evaluation's
 

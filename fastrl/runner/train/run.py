@@ -9,20 +9,17 @@ from pathlib import Path
 import numpy as np
 from rich.console import Console
 
-from ..agents.sb3 import load_checkpoint, policy_function, save_checkpoint
-from ..atomic import DiskFull, is_disk_full, write_json, write_text
-from ..irl.export import save_networks
-from ..log import RunRecorder
-from ..log.recording import recording_problem, repair_recording
-from ..model.compiler import CompiledTask, compile_task
-from ..spec import load_spec
-from ..spec.models import TaskSpec
-from .evaluation import evaluate_run
-from .learner import build_learner
-from .monitoring import training_monitor
-from .rundir import clean_leftovers, latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
-from .runfiles import read_metrics, read_run_spec, read_state, require
-from .stops import (
+from ...agents.sb3 import load_checkpoint, policy_function, save_checkpoint
+from ...atomic import DiskFull, is_disk_full, write_json, write_text
+from ...irl.export import save_networks
+from ...log import RunRecorder
+from ...log.recording import recording_problem, repair_recording
+from ...model.compiler import CompiledTask, compile_task
+from ...spec import load_spec
+from ...spec.models import TaskSpec
+from ..runs.rundir import clean_leftovers, latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
+from ..runs.runfiles import read_metrics, read_run_spec, read_state, require
+from ..runs.stops import (
     EvaluationInterrupted,
     RunInterrupted,
     RunOutOfSpace,
@@ -32,6 +29,9 @@ from .stops import (
     space_to_resume,
     stop_on_sigterm,
 )
+from .evaluation import evaluate_run
+from .learner import build_learner
+from .monitoring import training_monitor
 from .warm import warm_start_run
 
 __all__ = ["EvaluationInterrupted", "RunInterrupted", "RunOutOfSpace", "resume_run", "start_run"]

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..bundled import SPECS_DIR, find_spec
-from ..spec import SpecError, load_spec
-from .runfiles import read_eval, read_meta
+from ...bundled import SPECS_DIR, find_spec
+from ...spec import SpecError, load_spec
+from ..runs.runfiles import read_eval, read_meta
 
 FAR_BELOW = 0.5  # the agent completes under half the expert's share of subtasks
 

@@ -13,30 +13,30 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 
-from ..agents.anchor import CloneAnchor
-from ..agents.bc import action_accuracy, behaviour_clone
-from ..agents.sb3 import build_model, make_vec_env
-from ..data.recordings import load_recordings, with_actions
-from ..data.replay import demonstration_pairs
-from ..data.trajectory import Trajectory
-from ..env.fast_env import FastEnv
-from ..irl import (
+from ...agents.anchor import CloneAnchor
+from ...agents.bc import action_accuracy, behaviour_clone
+from ...agents.sb3 import build_model, make_vec_env
+from ...data.recordings import load_recordings, with_actions
+from ...data.replay import demonstration_pairs
+from ...data.trajectory import Trajectory
+from ...env.fast_env import FastEnv
+from ...irl import (
     AdversarialCallback,
     Discriminator,
     DiscriminatorForm,
     OffPolicyAdversarialCallback,
     RelabelingReplayBuffer,
 )
-from ..irl.averaging import RewardAveraging
-from ..irl.demonstrations import expert_transitions
-from ..irl.fitting import DiscriminatorFit, Transitions
-from ..irl.ranking import RankedRollouts
-from ..model.scope import joint_ranges
-from ..spec.columns import discriminator_inputs, reward_inputs
-from ..spec.models import TaskSpec
+from ...irl.averaging import RewardAveraging
+from ...irl.demonstrations import expert_transitions
+from ...irl.fitting import DiscriminatorFit, Transitions
+from ...irl.ranking import RankedRollouts
+from ...model.scope import joint_ranges
+from ...spec.columns import discriminator_inputs, reward_inputs
+from ...spec.models import TaskSpec
+from ..runs.rundir import update_meta
 from .cloned import cloned_actor
 from .demos import write_demos
-from .rundir import update_meta
 
 
 @dataclass

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import yaml
 
-from ..model.compiler import compile_task
-from ..spec import SpecError, SpecIssue, load_spec
-from .runfiles import RunFileError, read_eval, read_meta
+from ...model.compiler import compile_task
+from ...spec import SpecError, SpecIssue, load_spec
+from ..runs.runfiles import RunFileError, read_eval, read_meta
 
 MANIFEST = "sweep.json"
 

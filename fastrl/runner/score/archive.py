@@ -6,8 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..assess.journal import Journal, slim
-from ..assess.scoring import TrajectoryScores
+from ...assess.journal import Journal, slim
+from ...assess.scoring import TrajectoryScores
 
 SAMPLE = 200  # beyond this many files, the paths, deviations and the recording draw this many of them
 

@@ -6,14 +6,14 @@ from pathlib import Path
 
 from rich.progress import Progress
 
-from ..agents.expert import ScriptedExpert
-from ..data.render_video import write_trajectory_video
-from ..data.replay import rollout_trajectory
-from ..data.video_import import endoscope_size
-from ..env.fast_env import FastEnv
-from ..spec import load_spec
-from ..spec.models import TaskSpec
-from .saved import load_policy
+from ...agents.expert import ScriptedExpert
+from ...data.render_video import write_trajectory_video
+from ...data.replay import rollout_trajectory
+from ...data.video_import import endoscope_size
+from ...env.fast_env import FastEnv
+from ...spec import load_spec
+from ...spec.models import TaskSpec
+from ..runs.saved import load_policy
 
 
 def write_demos(

@@ -11,13 +11,13 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..assess.figures import deviations, draw_path_figures, plot_distributions
-from ..assess.journal import Journal, identity
-from ..assess.references import expert_paths, references_for
-from ..assess.report import SCORING_ERRORS, build_report, csv_text, group_key, problem_text, row, trajectory_files
-from ..assess.scoring import Scorer, TrajectoryScores, normalise
-from ..irl.network_files import has_networks
-from ..spec import load_spec
+from ...assess.figures import deviations, draw_path_figures, plot_distributions
+from ...assess.journal import Journal, identity
+from ...assess.references import expert_paths, references_for
+from ...assess.report import SCORING_ERRORS, build_report, csv_text, group_key, problem_text, row, trajectory_files
+from ...assess.scoring import Scorer, TrajectoryScores, normalise
+from ...irl.network_files import has_networks
+from ...spec import load_spec
 from .archive import SAMPLE, Job, gathered, plan_job, sample_note
 from .helper import Helper, journaling, record_assessment, score_shared
 from .video_inputs import videos_as_trajectories
@@ -52,7 +52,7 @@ def load_scorer(run: Path | None, spec_path: Path | None, networks: bool = True)
             raise FileNotFoundError(f"{run} is not a run directory (no spec.yaml)")
         loaded = None
         if networks and has_networks(run / "networks"):
-            from ..irl.networks import load_networks
+            from ...irl.networks import load_networks
 
             loaded = load_networks(run / "networks")
         return Scorer(load_spec(run / "spec.yaml"), loaded), run.name
@@ -107,7 +107,7 @@ def score_with_helper(
     keep = {k for k, i in enumerate(job.todo) if i in job.keep}
     theirs = helper.score_share(todo, Journal(path=job.journal.path, identity=job.journal.identity), keep)
     if pictures:  # this process draws the distributions
-        from ..assess.figures import _pyplot
+        from ...assess.figures import _pyplot
 
         _pyplot()
 

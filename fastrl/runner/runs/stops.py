@@ -8,7 +8,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from ..atomic import DiskFull, free_bytes, megabytes
+from ...atomic import DiskFull, free_bytes, megabytes
 
 RESERVE_BYTES = 2_000_000  # kept free for closing the recording and writing meta.json when the disk fills
 

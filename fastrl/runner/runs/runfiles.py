@@ -9,9 +9,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..agents.checkpoint_files import checkpoint_problem
-from ..spec import SpecError, load_spec
-from ..spec.models import TaskSpec
+from ...agents.checkpoint_files import checkpoint_problem
+from ...spec import SpecError, load_spec
+from ...spec.models import TaskSpec
 
 MAX_JSON_BYTES = 64 * 1024 * 1024  # meta.json, eval.json, state.json are kilobytes
 RRD_TRAILER = struct.Struct("<QQI8sI")  # rerun 0.41: footer offset, footer length, checksum, b"RRF2FOOT", version

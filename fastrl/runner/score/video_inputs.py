@@ -8,11 +8,11 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ..data.trajectory import TrajectoryError
-from ..data.video import VideoError
-from ..data.video_import import endoscope_size
-from ..env.fast_env import FastEnv
-from ..spec.models import TaskSpec
+from ...data.trajectory import TrajectoryError
+from ...data.video import VideoError
+from ...data.video_import import endoscope_size
+from ...env.fast_env import FastEnv
+from ...spec.models import TaskSpec
 from .video import VIDEO_SUFFIXES, Batch, _named
 
 # A pose read off a frame is about 1 degree off in pitch and yaw and 3-5 in the light cable's angle (TraceLines);
@@ -56,7 +56,7 @@ def videos_as_trajectories(
     batch = Batch()
     if not videos:
         return list(inputs), batch, None
-    from ..data.video_poses import estimator_for, video_trajectory  # here: scoring trajectories needs no torch
+    from ...data.video_poses import estimator_for, video_trajectory  # here: scoring trajectories needs no torch
 
     w, h = endoscope_size(spec)
     env = FastEnv(spec, width=w, height=h)  # renders as the task's videos are rendered

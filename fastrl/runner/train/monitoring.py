@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..agents.sb3 import batch_policy
-from ..env.fast_env import FastEnv
-from ..log import RunRecorder
-from ..spec.irl import min_steps
-from ..spec.models import TaskSpec
+from ...agents.sb3 import batch_policy
+from ...env.fast_env import FastEnv
+from ...log import RunRecorder
+from ...spec.irl import min_steps
+from ...spec.models import TaskSpec
 from .evaluate import evaluate_batched
 from .monitor import (
     Checkpoints,

@@ -6,8 +6,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..data.episode import EpisodeRecord
-from ..data.loop import EpisodeRecorder, episode_steps
+from ...data.episode import EpisodeRecord
+from ...data.loop import EpisodeRecorder, episode_steps
 
 Policy = Callable[[np.ndarray], object]
 

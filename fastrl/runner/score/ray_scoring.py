@@ -6,10 +6,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ..assess.journal import record
-from ..assess.references import references_for
-from ..assess.report import SCORING_ERRORS, problem_text
-from ..assess.scoring import Scorer
+from ...assess.journal import record
+from ...assess.references import references_for
+from ...assess.report import SCORING_ERRORS, problem_text
+from ...assess.scoring import Scorer
 
 BATCH = 8  # files per Ray call: small, so a stop loses little and results stream
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 from rich.console import Console
 
-from .sweep import SweepError, is_finished, read_manifest
-from .sweep_trial import run_trial
+from .plan import SweepError, is_finished, read_manifest
+from .trial import run_trial
 
 
 def _ray_init(address: str | None, cpus: int) -> bool:
