@@ -59,7 +59,7 @@ def irl_run(task: str, algorithm: str, root: Path, seed: int = 0) -> Path | None
 
 def score_task(task: str, levels: int, per_level: int, root: Path, seed: int = 0) -> dict:
     """Both algorithms' reports on the task's cohort."""
-    from fastrl.runner.assessment import assess
+    from fastrl.runner.score.assessment import assess
 
     cohort = cohort_dir(task, levels, per_level)
     out = {}
@@ -154,7 +154,7 @@ def across_seeds(files: list[Path]) -> None:
 def timing(root: Path, seed: int = 0, levels: int = 5, per_level: int = 20, rounds: int = 3) -> dict | None:
     """Seconds to score 100 TraceLines trajectories with the AIRL run (replay and networks included); None: no run."""
     from fastrl.assess.report import score_files, trajectory_files
-    from fastrl.runner.assessment import load_scorer
+    from fastrl.runner.score.assessment import load_scorer
 
     run = irl_run("tracelines", "airl", root, seed)
     if run is None:

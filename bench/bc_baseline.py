@@ -18,7 +18,7 @@ from fastrl.agents.bc import action_accuracy, behaviour_clone
 from fastrl.agents.sb3 import build_model, make_vec_env, policy_function
 from fastrl.data.replay import demonstration_pairs, expert_trajectories
 from fastrl.env import FastEnv
-from fastrl.runner.evaluate import evaluate
+from fastrl.runner.train.evaluate import evaluate
 from fastrl.spec import load_spec
 
 

@@ -93,9 +93,9 @@ def sweep(
     spec: Path, overrides: list[str], *, seeds, cpus: int, folder: Path, settings, address, prefix: str = ""
 ) -> None:
     """One `fastrl sweep` (settings x seeds, each trial an ordinary run), its results written and failures said."""
-    from fastrl.runner.sweep import create_sweep
-    from fastrl.runner.sweep_ray import run_sweep
-    from fastrl.runner.sweep_table import write_results
+    from fastrl.runner.sweep.plan import create_sweep
+    from fastrl.runner.sweep.table import write_results
+    from fastrl.runner.sweep.tune import run_sweep
 
     t0 = time.perf_counter()
     create_sweep(spec, overrides, {}, seeds, cpus, folder, settings)

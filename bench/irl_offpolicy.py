@@ -5,7 +5,7 @@
 
 Variants: `full` (spectral normalisation + discriminator trained on the current rollout only),
 `no-current-rollout` (spectral norm, discriminator trained on samples of the whole replay buffer),
-`no-spectral-norm` (current rollout, plain discriminator). `run` is one sweep (fastrl.runner.sweep, on Ray Tune:
+`no-spectral-norm` (current rollout, plain discriminator). `run` is one sweep (fastrl.runner.sweep.plan, on Ray Tune:
 a local Ray, or a cluster with --address) whose configurations are the variants and whose trials are variant x
 seed, each a real run directory under ROOT/<time>-sweep/ with a deterministic evaluation on 10 seeds every
 --eval-every steps, the same budget for all (a run stops at its first evaluation at >= 95% of subtasks, the

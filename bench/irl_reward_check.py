@@ -80,7 +80,7 @@ def untrained_policy(spec):
 
 def run_policies(run: Path, untrained: bool = True) -> dict[int, object]:
     """A run's saved policies by training steps: every checkpoint, and the untrained policy (same seed) as 0."""
-    from fastrl.runner.saved import checkpoint_policy
+    from fastrl.runner.runs.saved import checkpoint_policy
     from fastrl.spec import load_spec
 
     spec = load_spec(run / "spec.yaml")

@@ -3,7 +3,7 @@
     python bench/irl_tasks.py run --tasks tracelines --algos gail airl ppo --seeds 0 1 2  # a `fastrl sweep` per task
     python bench/irl_tasks.py report                                          # table + figure from the runs
 
-`run` makes one sweep per task (fastrl.runner.sweep, on Ray Tune: a local Ray, or a cluster with --address) whose
+`run` makes one sweep per task (fastrl.runner.sweep.plan, on Ray Tune: a local Ray, or a cluster with --address) whose
 configurations are the algorithms and whose trials are algorithm x seed, each a real run directory under
 ROOT/TASK/<time>-sweep/ with periodic deterministic evaluation (10 seeds every 50k steps), a 3M-step cap, and early
 stop once an evaluation completes every subtask; --cpus-per-trial CPUs (and torch threads) each, so a 2-core machine

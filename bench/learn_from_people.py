@@ -159,7 +159,7 @@ def protocol(task: str, inputs: Path, keep: bool, args) -> dict:
         },
     }
     if task == "liver_tour":
-        from fastrl.runner.experiment import correlation
+        from fastrl.runner.study import correlation
 
         rows = report["trajectories"]
         out["table3"] = {

@@ -5,7 +5,7 @@
 
 Each seed runs `fastrl run specs/liver_tour.yaml --set train.seed=S` (the same synthetic cohort of 100
 procedures, GAIL and AIRL with a PPO generator on its 10 best) into runs/bench-liver/<budget>/s<S>; a finished
-experiment there is read back, not rerun. Prints Spearman's rho as mean ± sd over the seeds (the paper reports
+study there is read back, not rerun. Prints Spearman's rho as mean ± sd over the seeds (the paper reports
 0.73 to 0.82 against economy, 0.24 to 0.25 against safety), the largest p-value, the wall time per seed and the
 machine. Writes docs/liver_table3_<timesteps or default>.json.
 """
@@ -28,19 +28,19 @@ SPEC = Path("specs/liver_tour.yaml")
 CELLS = ("reward-economy", "reward-safety", "value-economy", "value-safety")
 
 
-def experiment(seed: int, timesteps: int | None) -> tuple[dict, float]:
-    """The experiment.json of one seed (run now if not finished before) and the seconds it took now."""
+def study(seed: int, timesteps: int | None) -> tuple[dict, float]:
+    """The Table 3 file (experiment.json) of one seed (run now if not finished before) and the seconds it took now."""
     from rich.console import Console
 
-    from fastrl.runner.experiment import start_experiment
+    from fastrl.runner.study import start_study
 
     root = Path("runs/bench-liver") / (str(timesteps) if timesteps else "default") / f"s{seed}"
     done = sorted(root.glob("*/*/experiment.json"))
     if done:
         return json.loads(done[-1].read_text()), 0.0
-    overrides = [f"train.seed={seed}"] + ([f"experiment.timesteps={timesteps}"] if timesteps else [])
+    overrides = [f"train.seed={seed}"] + ([f"study.timesteps={timesteps}"] if timesteps else [])
     t0 = time.perf_counter()
-    run = start_experiment(SPEC, overrides, root=str(root), console=Console(), progress=True)
+    run = start_study(SPEC, overrides, root=str(root), console=Console(), progress=True)
     return json.loads((run / "experiment.json").read_text()), time.perf_counter() - t0
 
 
@@ -67,7 +67,7 @@ def main() -> None:
     args = ap.parse_args()
     results, seconds = [], []
     for s in args.seeds:
-        r, t = experiment(s, args.timesteps)
+        r, t = study(s, args.timesteps)
         results.append(r)
         seconds.append(t)
     table = summary(results)
@@ -86,7 +86,7 @@ def main() -> None:
     print(f"heuristic return: economy {h['heuristic-economy']['rho']:.2f}, safety {h['heuristic-safety']['rho']:.2f}")
     timed = [t for t in seconds if t > 0]
     if timed:
-        print(f"wall time per seed: {np.mean(timed) / 60:.1f} min (whole experiment: cohort, 2 trainings, scoring)")
+        print(f"wall time per seed: {np.mean(timed) / 60:.1f} min (whole study: cohort, 2 trainings, scoring)")
     out = Path(f"docs/liver_table3_{args.timesteps or 'default'}.json")
     out.write_text(
         json.dumps(

@@ -31,9 +31,9 @@ from common import machine_line
 from fastrl.agents.workers import FreshInfoVecEnv, SplitVecEnv
 from fastrl.env.fast_env import FastEnv
 from fastrl.log import RunRecorder
-from fastrl.runner import monitor as run_monitor
-from fastrl.runner import run as run_stage
 from fastrl.runner import start_run
+from fastrl.runner.train import monitor as run_monitor
+from fastrl.runner.train import run as run_stage
 
 TIMERS: dict[str, float] = defaultdict(float)
 CALLS: dict[str, int] = defaultdict(int)

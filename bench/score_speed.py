@@ -113,7 +113,7 @@ class Side:
         """The report's seconds of the median run, and the rest."""
         median = statistics.median(self.walls)
         seconds = self.seconds[self.walls.index(sorted(self.walls)[len(self.walls) // 2])]
-        lines = [f"  python + imports             {startup:6.2f}   (python -c 'import fastrl.runner.assessment')"]
+        lines = [f"  python + imports             {startup:6.2f}   (python -c 'import fastrl.runner.score.assessment')"]
         lines += [
             f"  {k:28s} {seconds[k]:6.2f}"
             for k in ("load", "references", "scoring", "report", "pictures")
@@ -147,7 +147,7 @@ def main() -> None:
         )
     print(f"machine: {machine_line()}")
     print(f"run: {run}\ntrajectories: {trajectories} ({n} files)\ncommand: {' '.join(sides[-1].cmd[1:])}")
-    imports = [sys.executable, "-c", "import fastrl.runner.assessment"]
+    imports = [sys.executable, "-c", "import fastrl.runner.score.assessment"]
     for side in sides:
         where = [sys.executable, "-c", "import fastrl; print(fastrl.__file__)"]
         found = subprocess.run(

@@ -33,9 +33,9 @@ from common import cpu_model, load_average, load_figures, machine_line, utc_stam
 from rich.console import Console
 
 from fastrl.runner import start_run
-from fastrl.runner.sweep import create_sweep, trial_overrides
-from fastrl.runner.sweep_ray import run_sweep
-from fastrl.runner.sweep_table import summarize
+from fastrl.runner.sweep.plan import create_sweep, trial_overrides
+from fastrl.runner.sweep.table import summarize
+from fastrl.runner.sweep.tune import run_sweep
 
 SPEC = Path(__file__).resolve().parent.parent / "specs" / "tracelines.yaml"
 

@@ -50,8 +50,8 @@ ALGO_SETS = {"PPO": [], "SAC": ["train.algo=SAC", "actions.mode=rates"]}  # fast
 
 def fastrl_side(task: str, seed: int, out: Path, sets: list[str]) -> None:
     """One `fastrl run` in this process; its periodic evaluations (timesteps, subtasks, time) into out."""
-    from fastrl.runner import monitoring
-    from fastrl.runner import run as run_stage
+    from fastrl.runner.train import monitoring
+    from fastrl.runner.train import run as run_stage
 
     events = []
     wrapped = monitoring.periodic_evaluator
@@ -84,7 +84,7 @@ def sb3_side(task: str, seed: int, out: Path, cap: float, every: int, algo: str)
     from stable_baselines3.common.env_util import make_vec_env
 
     from fastrl.env.fast_env import FastEnv
-    from fastrl.runner.evaluate import evaluate_batched
+    from fastrl.runner.train.evaluate import evaluate_batched
     from fastrl.spec import load_spec
 
     spec = load_spec(ROOT / "specs" / f"{task}.yaml", ALGO_SETS[algo])

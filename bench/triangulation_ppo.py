@@ -1,7 +1,7 @@
 """PPO on the heuristic reward of the two-handed triangulation task: steps and wall time to 90% of the subtasks.
 
     python bench/triangulation_ppo.py [--spec specs/triangulation.yaml] [--cap 2000000] [--seed 0]
-                                      [--root runs/bench-hands] [--set KEY=VALUE ...]
+                                      [--root runs/bench-instruments] [--set KEY=VALUE ...]
 
 One real `fastrl run` with a deterministic evaluation (10 seeds) every 100k steps, stopped early once an evaluation
 completes 95% of the subtasks; prints the machine, the load, the curve, the first evaluation at >= 90% (steps,
@@ -28,7 +28,7 @@ def main() -> None:
     p.add_argument("--spec", default="specs/triangulation.yaml")
     p.add_argument("--cap", type=int, default=2_000_000)
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--root", default="runs/bench-hands")
+    p.add_argument("--root", default="runs/bench-instruments")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="spec change (repeatable)")
     args = p.parse_args()
     from fastrl.runner import start_run

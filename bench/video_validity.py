@@ -41,7 +41,7 @@ REENCODES = {
 
 def videos(folder: Path, out: Path) -> Path:
     """The cohort's endoscope videos, rendered once."""
-    from fastrl.runner.video import render_videos
+    from fastrl.runner.score.video import render_videos
 
     files = sorted(folder.glob("*.npz"))
     if len(list(out.glob("*.mp4"))) != len(files):
@@ -121,7 +121,7 @@ def score(run: Path, inputs: Path, output: Path):
     """`fastrl score --run RUN INPUTS`, quiet, no pictures; (report, seconds)."""
     from rich.console import Console
 
-    from fastrl.runner.assessment import assess
+    from fastrl.runner.score.assessment import assess
 
     t0 = time.perf_counter()
     done = assess(

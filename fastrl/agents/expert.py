@@ -17,11 +17,11 @@ class ScriptedExpert:
     """Drives a FastEnv through every subtask; `act()` returns an action in the env's action space."""
 
     def __new__(cls, env, *args, scope_only: bool = False, **kwargs):
-        """A task with instruments gets the two-handed expert, which drives the scope through a scope-only one."""
+        """A task with instruments gets the two-instrument expert, which drives the scope through a scope-only one."""
         if cls is ScriptedExpert and not scope_only and env.unwrapped.task.instruments:
-            from .hands_expert import TwoHandExpert
+            from .instruments_expert import TwoInstrumentExpert
 
-            return TwoHandExpert(env, ScriptedExpert(env, *args, scope_only=True, **kwargs))
+            return TwoInstrumentExpert(env, ScriptedExpert(env, *args, scope_only=True, **kwargs))
         return super().__new__(cls)
 
     def __init__(self, env, pivot_weight: float | None = None, cable_weight: float = 0.005, scope_only: bool = False):
@@ -37,7 +37,7 @@ class ScriptedExpert:
         nv = self.env.model.nv
         self.jacp, self.jacr = np.zeros((3, nv)), np.zeros((3, nv))
         self.goal, self.goal_for, self.waiting = None, -1, 0
-        self.level = True  # solve for a level horizon too (the two-handed expert, whose tasks ignore it, does not)
+        self.level = True  # solve for a level horizon too (the two-instrument expert, whose tasks ignore it, does not)
 
     def reset(self) -> None:
         """Forget the current goal (call after env.reset)."""

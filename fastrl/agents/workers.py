@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-import multiprocessing as mp
 import signal
 from collections.abc import Callable
 
 import gymnasium as gym
 import numpy as np
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
+
+from .. import forked
 
 
 class FreshInfoVecEnv(DummyVecEnv):
@@ -35,10 +36,8 @@ def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int) -> 
     the pipe) and ends when the pipe closes, so it never outlives its parent. The parent's ends of the pipes,
     inherited by the fork, are closed first: else the pipe would never read as closed.
     """
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    for end in parent_ends:
-        end.close()
+    forked.child_signals(term=signal.SIG_IGN)
+    forked.close_ends(parent_ends)
     venv = FreshInfoVecEnv([make_env for _ in range(n)])
     try:
         while True:
@@ -81,15 +80,13 @@ class SplitVecEnv(VecEnv):
         forked after this process rendered would deadlock in Mesa's EGL as soon as it rendered itself."""
         batches = [len(b) for b in np.array_split(np.arange(n_envs), max(1, min(processes, n_envs)))]
         self.local = FreshInfoVecEnv([make_env for _ in range(batches[0])])
-        methods = mp.get_all_start_methods()
-        fresh = "forkserver" if "forkserver" in methods else "spawn"
-        ctx = mp.get_context("fork" if fork and "fork" in methods else fresh)
+        ctx = forked.context(fork)
         self.batches, self.pipes, self.procs = batches, [], []
         for n in batches[1:]:
             parent, child = ctx.Pipe()
             ends = [*self.pipes, parent] if ctx.get_start_method() == "fork" else []
             proc = ctx.Process(target=_serve, args=(child, ends, make_env, n), daemon=True, name="fastrl-envs")
-            proc.start()
+            forked.start(proc)
             child.close()
             self.pipes.append(parent)
             self.procs.append(proc)

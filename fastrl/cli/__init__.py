@@ -185,7 +185,7 @@ def demos(
     ] = False,
 ) -> None:
     """Write demonstrations (trajectory .npz files) from a trained run or the scripted expert."""
-    from ..runner.demos import write_demos
+    from ..runner.train.demos import write_demos
 
     if (source is None) == (expert is None):
         err.print("give RUN_DIR, or --expert SPEC", markup=False)
@@ -270,7 +270,7 @@ def view(
     port: Annotated[int, typer.Option(help="with --web: the web viewer's port")] = 9090,
 ) -> None:
     """Open a run's recording in the Rerun viewer (or say how, where there is no display)."""
-    from ..runner.runfiles import recording_fault
+    from ..runner.runs.runfiles import recording_fault
     from .runcheck import check_run
 
     if (run_dir / "recording.rrd").is_file():  # a run directory (a sweep folder is served as it is)

@@ -20,7 +20,7 @@ def runs_(
     """List runs with their headline figures, newest first."""
     from rich.table import Table
 
-    from ..runner.rundir import list_runs
+    from ..runner.runs.rundir import list_runs
 
     rows = list_runs(root)
     if as_json:

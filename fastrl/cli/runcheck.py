@@ -11,7 +11,7 @@ from . import err
 
 def check_run(run: Path, needed: set[str], checkpoints: bool = True) -> None:
     """Print a note per damaged file of `run`; exit 2 naming the first damaged one in `needed` (no traceback)."""
-    from ..runner.runfiles import RunFileError, require
+    from ..runner.runs.runfiles import RunFileError, require
 
     run = Path(run)
     if not run.is_dir():

@@ -48,7 +48,7 @@ def score(
     ] = False,
 ) -> None:
     """Score trajectories by replay: heuristic and learned reward, learned value, length, time, smoothness."""
-    from ..runner.assessment import assess
+    from ..runner.score.assessment import assess
     from ..spec import SpecError
 
     if (run is None) == (spec is None):
@@ -74,7 +74,7 @@ def score(
     except (SpecError, FileNotFoundError, ValueError) as e:
         exit_with(e)
     except KeyboardInterrupt:
-        from ..runner.assessment import outputs_for
+        from ..runner.score.assessment import outputs_for
 
         journal = outputs_for(output, run)["journal"]
         err.print(f"interrupted: the files scored so far are kept in {journal}", markup=False)

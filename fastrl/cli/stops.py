@@ -56,8 +56,8 @@ def repair(run_dir: Annotated[Path, typer.Argument(metavar="RUN_DIR", show_defau
     from ..agents.sb3 import checkpoint_problem
     from ..atomic import DiskFull
     from ..log.recording import repair_recording
-    from ..runner.rundir import latest_checkpoint, rebuild_meta
-    from ..runner.runfiles import RunFileError, read_eval, read_meta, read_run_spec
+    from ..runner.runs.rundir import latest_checkpoint, rebuild_meta
+    from ..runner.runs.runfiles import RunFileError, read_eval, read_meta, read_run_spec
 
     try:
         read_run_spec(run_dir)

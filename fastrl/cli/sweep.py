@@ -67,9 +67,9 @@ def sweep(
     runs: Annotated[Path, typer.Option("--runs", help="root folder of run directories")] = Path("runs"),
 ) -> None:
     """Run a grid of spec settings x seeds on Ray Tune; print and write the results table, best and figure."""
-    from ..runner.sweep import SweepError, create_sweep, parse_grid, parse_seeds, read_manifest
-    from ..runner.sweep_ray import run_sweep
-    from ..runner.sweep_table import write_results
+    from ..runner.sweep.plan import SweepError, create_sweep, parse_grid, parse_seeds, read_manifest
+    from ..runner.sweep.table import write_results
+    from ..runner.sweep.tune import run_sweep
 
     if (spec is None) == (resume is None):
         err.print("give a SPEC and --grid to start a sweep, or --resume SWEEP_DIR (not both)", markup=False)

@@ -15,29 +15,29 @@ from . import err, exit_with, out, write_text
 def train_and_report(
     spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool, timesteps: int | None
 ) -> None:
-    """Start (or resume) a run or experiment, turn interruptions and bad input into messages, print the evaluation."""
+    """Start (or resume) a run or study, turn interruptions and bad input into messages, print the evaluation."""
     from ..agents.sb3 import CheckpointDamaged, CheckpointMismatch
     from ..atomic import DiskFull
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
-    from ..runner.runfiles import RunFileError, read_eval
-    from ..runner.stops import stop_on_sigterm
-    from ..runner.training import plan_training, train
+    from ..runner.runs.runfiles import RunFileError, read_eval
+    from ..runner.runs.stops import stop_on_sigterm
+    from ..runner.train.training import plan_training, train
     from .stops import report_stop
 
     with stop_on_sigterm(until_exit=True):  # a second Ctrl-C while the run saves is ignored until exit
         try:
             plan = plan_training(spec, overrides, resume)
-            if plan.experiment:
-                from .experiment import experiment_and_report
+            if plan.study:
+                from .study import study_and_report
 
-                return experiment_and_report(plan, runs, progress)
+                return study_and_report(plan, runs, progress)
             run_dir = train(plan, runs, out, progress, timesteps)
         except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
             report_stop(stop)
         except (SpecError, FileNotFoundError, CheckpointMismatch, CheckpointDamaged, RunFileError) as e:
             exit_with(e)
     print_eval(read_eval(run_dir))
-    from ..runner.advice import learning_advice
+    from ..runner.train.advice import learning_advice
 
     advice = learning_advice(run_dir, spec)
     if advice:
@@ -48,7 +48,7 @@ def train_and_report(
 def eval_and_report(run_dir: Path | None, expert: Path | None, episodes: int | None, output: Path | None) -> None:
     """Re-evaluate a saved run or the scripted expert, print the figures (and write them to `output`)."""
     from ..runner import EvaluationInterrupted, evaluate_expert, evaluate_saved
-    from ..runner.stops import stop_on_sigterm
+    from ..runner.runs.stops import stop_on_sigterm
     from .runcheck import check_run
     from .stops import stop_code
 

@@ -75,7 +75,7 @@ def render_video(
 ) -> None:
     """Write the endoscope video (H.264 mp4) of trajectories: their frames, or their replay rendered."""
     from ..data.video import CODECS
-    from ..runner.video import expand, render_videos
+    from ..runner.score.video import expand, render_videos
 
     files = expand(inputs, (".npz",))
     _check_output(output, files, ".mp4")
@@ -123,7 +123,7 @@ def import_video_(
 ) -> None:
     """Read videos into video-only trajectories: frames on the control grid, no portal coordinates."""
     from ..data.trajectory import SOURCES
-    from ..runner.video import VIDEO_SUFFIXES, expand, import_videos
+    from ..runner.score.video import VIDEO_SUFFIXES, expand, import_videos
 
     files = expand(inputs, VIDEO_SUFFIXES)
     _check_output(output, files, ".npz")

@@ -9,7 +9,7 @@ import numpy as np
 from ..env.fast_env import FastEnv
 from ..spec.models import TaskSpec
 from .families import draw_mix, foreign_family, mixed_profile, overlay_severities
-from .hands_trainee import TwoHandTrainee
+from .instruments_trainee import TwoInstrumentTrainee
 from .overlays import overlaid
 from .replay import replay, rollout_trajectory
 from .trainee import Trainee
@@ -42,7 +42,7 @@ def make_cohort(
             s = seed + (level - 1) * per_level + i
             mix = draw_mix(families, s)
             profile = mixed_profile(mix, level, levels)
-            trainee = (TwoHandTrainee if env.task.instruments else Trainee)(env, profile, s)
+            trainee = (TwoInstrumentTrainee if env.task.instruments else Trainee)(env, profile, s)
             meta = {
                 "source": "synthetic",
                 "subject": subject_name(level, i + 1),

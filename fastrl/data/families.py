@@ -58,7 +58,7 @@ FAMILIES = {
 }
 
 
-TWO_HANDED = ("classic", "flow", "speed", "corrections")  # what the two-handed trainee acts out (hands_trainee.py)
+WITH_INSTRUMENTS = ("classic", "flow", "speed", "corrections")  # what instruments_trainee.py acts out
 
 
 def family_names(text: str) -> tuple[str, ...]:
@@ -72,11 +72,11 @@ def family_names(text: str) -> tuple[str, ...]:
     return names
 
 
-def foreign_family(families: tuple[str, ...], two_handed: bool) -> str | None:
-    """Why a task cannot show these families (None: it can): scope-only deviations on a two-handed task."""
-    foreign = [f for f in families if two_handed and f not in TWO_HANDED]
+def foreign_family(families: tuple[str, ...], instruments: bool) -> str | None:
+    """Why a task cannot show these families (None: it can): scope-only deviations on a task with instruments."""
+    foreign = [f for f in families if instruments and f not in WITH_INSTRUMENTS]
     if foreign:
-        return f"family {foreign[0]} deviates the scope alone; two-handed tasks take {', '.join(TWO_HANDED)}"
+        return f"family {foreign[0]} deviates the scope alone; two-handed tasks take {', '.join(WITH_INSTRUMENTS)}"
     return None
 
 

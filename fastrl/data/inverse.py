@@ -142,7 +142,7 @@ class ActionRecovery:
         u = self.env
         options = {"portal": traj.portal[0]}
         goals, tools = traj.portal, traj.instruments is not None and len(self.tool_qadr) == traj.instruments.shape[1]
-        if tools:  # two hands: every instrument's coordinates are matched too
+        if tools:  # with instruments: every instrument's coordinates are matched too
             options["instruments"], goals = traj.instruments[0], np.hstack([traj.portal, traj.instruments])
             kinds = [len(t.qadr) for t in u.task.instruments]
             self.weights = np.concatenate([WEIGHTS, *[TOOL_WEIGHTS[:k] for k in kinds]])

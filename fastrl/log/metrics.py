@@ -76,7 +76,7 @@ def _fmt(x) -> str:
 
 
 def summary_markdown(summary: dict, title: str = "Evaluation") -> str:
-    """Markdown of the headline figures of `fastrl.runner.evaluate.summarize` output."""
+    """Markdown of the headline figures of `fastrl.runner.train.evaluate.summarize` output."""
     g = summary.get
     lines = [
         f"## {title}",

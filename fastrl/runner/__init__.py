@@ -1,15 +1,16 @@
-"""Run stages: run directory, training with checkpoints, evaluation, recording."""
+"""The applications: train and resume (train/), sweeps (sweep/), scoring (score/), the assess protocol, the Table 3
+study; run folders, their files and stops (runs/)."""
 
 from importlib import import_module
 
 _FROM = {
-    "EvaluationInterrupted": ".stops",
-    "RunInterrupted": ".stops",
-    "RunOutOfSpace": ".stops",
-    "evaluate_expert": ".evaluation",
-    "evaluate_saved": ".evaluation",
-    "resume_run": ".run",
-    "start_run": ".run",
+    "EvaluationInterrupted": ".runs.stops",
+    "RunInterrupted": ".runs.stops",
+    "RunOutOfSpace": ".runs.stops",
+    "evaluate_expert": ".train.evaluation",
+    "evaluate_saved": ".train.evaluation",
+    "resume_run": ".train.run",
+    "start_run": ".train.run",
 }
 __all__ = sorted(_FROM)
 

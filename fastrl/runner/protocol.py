@@ -17,9 +17,9 @@ from ..atomic import write_text
 from ..data.inverse import to_control_rate
 from ..data.trajectory import Trajectory, TrajectoryError
 from ..spec import load_spec
-from .assessment import Assessment, assess, outputs_for
-from .rundir import new_run_dir, update_meta, write_meta
-from .video_inputs import video_files, video_overrides, videos_as_trajectories
+from .runs.rundir import new_run_dir, update_meta, write_meta
+from .score.assessment import Assessment, assess, outputs_for
+from .score.video_inputs import video_files, video_overrides, videos_as_trajectories
 
 BY = {
     "time": "subtasks completed (more first), then duration (shorter first)",
@@ -134,7 +134,7 @@ def run_protocol(
     """Rank, choose the best `top`, learn from them without actions on `seeds` training seeds (the spec's and the
     next ones), score everything; return what was done. `keep_actions` (bench/learn_from_people.py's comparison)
     learns from the recorded actions where there are."""
-    from .run import start_run
+    from .train.run import start_run
 
     console = console or Console(stderr=True)
     if by not in BY:
@@ -178,7 +178,7 @@ def run_protocol(
                 *overrides,
                 f"irl.algorithm={algorithm}",
                 f"irl.demonstrations.path={run / 'best'}",
-                "experiment.enabled=false",
+                "study.enabled=false",
                 *([f"train.seed={seed}"] if seeds > 1 else []),
             ],
             console=console,

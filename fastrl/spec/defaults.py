@@ -8,7 +8,7 @@ from typing import Any
 def algorithm_defaults(spec) -> dict[tuple[str, ...], Any]:
     """The defaults of a TaskSpec that depend on its algorithms, by field path.
 
-    The discriminator's only when a discriminator is trained: a spec without one (an experiment's) is run later as
+    The discriminator's only when a discriminator is trained: a spec without one (a study's) is run later as
     GAIL and as AIRL, and must resolve them then."""
     kind = spec.train.kind
     defaults: dict[tuple[str, ...], Any] = {("train", "normalize", "reward"): kind.normalize_reward}

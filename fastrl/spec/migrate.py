@@ -11,13 +11,17 @@ PORTAL_NOISE = ("pitch_deg", "yaw_deg", "insertion", "roll_deg", "cable_deg")
 
 
 def upgraded(data: Any) -> Any:
-    """Spec data with the 0.2 layout's start noise and jitter moved into episode.resets (0.3), draws kept alike.
+    """Spec data in the 0.2 layout in 0.3's: start noise and jitter in episode.resets, `experiment` named `study`.
 
     0.2 drew the scope's and every instrument's noise at each start even where it was zero, so the upgrade declares
     both (zeros included) and the random draws stay in the same order; the jitter drew nothing at zero."""
-    if not isinstance(data, dict) or not _old(data):
+    if not isinstance(data, dict) or not (_old(data) or "experiment" in data):
         return data
     data = copy.deepcopy(data)
+    if "experiment" in data and "study" not in data:
+        data["study"] = data.pop("experiment")
+    if not _old(data):
+        return data
     resets = {}
     scope_start = (data.get("scope") or {}).get("start")
     noise = scope_start.pop("noise", None) if isinstance(scope_start, dict) else None

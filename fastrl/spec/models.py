@@ -12,7 +12,6 @@ from .anatomy import landmark_pose
 from .base import NonNeg, Pos, Strict, _fail, _raise
 from .defaults import resolve_defaults
 from .episode import Episode, episode_term_errors
-from .experiment import Experiment
 from .instruments import Instrument, instrument_errors
 from .irl import IRL, late_starts, learning_train, starts_cloned
 from .limits import MAX_LINE_POINTS, MAX_REPLAY_GB, MAX_SUBTASKS
@@ -22,6 +21,7 @@ from .reach import avatar_problem, portal_point, reach_problem
 from .scenes import AbdomenScene, DomeScene, Organ, Portal, Scene  # noqa: F401 - Abdomen/Dome/Organ re-exported
 from .shaft import Shaft
 from .state_reward import Observation, Reward
+from .study import Study
 from .training import Evaluate, Train
 
 
@@ -148,7 +148,7 @@ class Actions(Strict):
 
 
 class TaskSpec(Strict):
-    """A whole task: scene, scope, task, episode, actions, observation, reward, train, irl, evaluate, experiment."""
+    """A whole task: scene, scope, task, episode, actions, observation, reward, train, irl, evaluate, study."""
 
     name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$")
     description: str = ""
@@ -163,7 +163,7 @@ class TaskSpec(Strict):
     train: Train = Train()
     irl: IRL = IRL()
     evaluate: Evaluate = Evaluate()
-    experiment: Experiment = Experiment()
+    study: Study = Study()
 
     @model_validator(mode="after")
     def _reachable(self):

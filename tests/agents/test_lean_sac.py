@@ -9,7 +9,7 @@ from stable_baselines3 import SAC
 
 from fastrl.agents.lean_sac import LeanSAC, squashed_sample
 from fastrl.agents.sb3 import build_model, make_vec_env
-from fastrl.runner.monitoring import periodic_every
+from fastrl.runner.train.monitoring import periodic_every
 from fastrl.spec import load_spec
 
 from ..conftest import spec_file

@@ -14,7 +14,7 @@ import torch
 from fastrl.agents.sb3 import batch_policy, build_model, make_vec_env
 from fastrl.agents.workers import FreshInfoVecEnv, SplitVecEnv
 from fastrl.env.fast_env import FastEnv
-from fastrl.runner.evaluate import evaluate, evaluate_batched
+from fastrl.runner.train.evaluate import evaluate, evaluate_batched
 from fastrl.spec import load_spec
 
 from ..conftest import spec_file

@@ -19,8 +19,8 @@ from fastrl.cli import app
 from fastrl.data.replay import expert_trajectories, replay, rollout_trajectory
 from fastrl.data.trajectory import Trajectory
 from fastrl.irl.networks import load_networks
-from fastrl.runner.assessment import assess
-from fastrl.runner.helper import Helper
+from fastrl.runner.score.assessment import assess
+from fastrl.runner.score.helper import Helper
 from fastrl.spec import load_spec
 
 from ..conftest import spec_file
@@ -283,7 +283,7 @@ def test_a_run_scored_in_two_processes_gives_the_same_report_and_neither_process
     assess([tmp_path / "in"], run=airl_run, output=here, reference_episodes=1, pictures=False, parallel=False)
     two = tmp_path / "two" / "scores.json"
     script = (  # the whole command in a fresh interpreter (this one has torch already), forced to use the helper
-        "import sys; from fastrl.runner import helper; helper.MIN_FILES = 2; from fastrl.cli import app; "
+        "import sys; from fastrl.runner.score import helper; helper.MIN_FILES = 2; from fastrl.cli import app; "
         "app(sys.argv[1:])"
     )
     args = ["score", str(tmp_path / "in"), "--run", str(airl_run), "-o", str(two), "--references", "1"]

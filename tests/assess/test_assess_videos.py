@@ -14,7 +14,7 @@ from fastrl.data.cohort import make_cohort
 from fastrl.data.pose_frames import labelled_frames
 from fastrl.data.render_video import write_trajectory_video
 from fastrl.data.video_poses import estimator_name
-from fastrl.runner.video_inputs import VIDEO_CENTRING
+from fastrl.runner.score.video_inputs import VIDEO_CENTRING
 from fastrl.spec import load_spec
 
 from ..runner.test_runner import rrd_verify

@@ -20,10 +20,10 @@ from fastrl.assess.journal import Journal
 from fastrl.assess.references import reference_scores
 from fastrl.assess.report import build_report, score_files
 from fastrl.assess.scoring import Scorer, normalise
-from fastrl.runner import archive, assessment
-from fastrl.runner.archive import sample_indices
-from fastrl.runner.assessment import assess
 from fastrl.runner.protocol import rank_recordings
+from fastrl.runner.score import archive, assessment
+from fastrl.runner.score.archive import sample_indices
+from fastrl.runner.score.assessment import assess
 
 from .test_assess import _spec, airl_run, degraded  # noqa: F401 (airl_run: the tiny real AIRL run, a fixture)
 

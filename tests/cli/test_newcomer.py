@@ -14,8 +14,8 @@ from rich.console import Console
 from typer.testing import CliRunner
 
 from fastrl.cli import app
-from fastrl.runner.demos import write_demos
-from fastrl.runner.learner import demonstrations
+from fastrl.runner.train.demos import write_demos
+from fastrl.runner.train.learner import demonstrations
 from fastrl.spec import load_spec
 
 from ..conftest import spec_file
@@ -58,7 +58,7 @@ def test_a_run_that_learned_nothing_says_so_and_what_to_try(copied_run):
 
 
 def test_the_expert_level_agent_gets_no_warning(tmp_path):
-    from fastrl.runner.advice import learning_advice
+    from fastrl.runner.train.advice import learning_advice
 
     run = tmp_path / "run"
     run.mkdir()

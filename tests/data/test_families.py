@@ -186,7 +186,7 @@ def test_mixed_cohort_labels_each_subject_with_its_mix(tmp_path):
     assert bad.exit_code == 2 and "Traceback" not in bad.output
 
 
-def test_two_handed_tasks_take_the_families_their_trainee_acts_out(tmp_path):
+def test_tasks_with_instruments_take_the_families_their_trainee_acts_out(tmp_path):
     spec = fastrl.make(spec_file("triangulation")).unwrapped.task_spec
     with pytest.raises(ValueError, match="deviates the scope alone"):
         next(make_cohort(spec, 2, 1, families=("depth",)))

@@ -19,8 +19,8 @@ import fastrl
 from fastrl.cli import app
 from fastrl.data import Trajectory, TrajectoryError, load_trajectories
 from fastrl.data.replay import expert_trajectories, replay
-from fastrl.runner.experiment import write_cohort
-from fastrl.runner.learner import demonstrations
+from fastrl.runner.study import write_cohort
+from fastrl.runner.train.learner import demonstrations
 from fastrl.spec import load_spec
 
 from ..conftest import spec_file
@@ -221,7 +221,7 @@ def test_score_names_and_skips_each_bad_file_and_scores_the_rest(tmp_path):
 
 
 def test_demonstrations_and_cohort_loading_skip_bad_files(tmp_path):
-    """`fastrl irl --demos DIR` and an experiment's cohort: bad files named on the console, the rest used."""
+    """`fastrl irl --demos DIR` and a study's cohort: bad files named on the console, the rest used."""
     folder, expected = bad_folder(tmp_path)
     console = Console(file=io.StringIO(), width=400)
     spec = load_spec(spec_file("tracelines"), [f"irl.demonstrations.path={folder}", "irl.algorithm=bc"])
@@ -231,7 +231,7 @@ def test_demonstrations_and_cohort_loading_skip_bad_files(tmp_path):
     good, errors = load_trajectories([folder])  # without the portal's ranges: only the pitch file loads too
     assert len(good) == 2 and len(errors) == len(expected) - 1
     console = Console(file=io.StringIO(), width=400)
-    spec = load_spec(spec_file("tracelines"), ["experiment.levels=2", "experiment.per_level=3", "experiment.best=1"])
+    spec = load_spec(spec_file("tracelines"), ["study.levels=2", "study.per_level=3", "study.best=1"])
     cohort = write_cohort(spec, folder, console, progress=False)
     assert [name for name, _ in cohort] == ["a_good"]
     assert_each_named(console.file.getvalue().splitlines(), folder, expected)

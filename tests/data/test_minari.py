@@ -77,7 +77,7 @@ def test_loose_bodies_round_trip_with_the_grasper_and_the_bodies(tmp_path):
     np.testing.assert_array_equal(back.bodies, traj.bodies)
     dataset = minari.MinariDataset(tmp_path / "datasets" / "fastrl" / "loose-v0" / "data")
     (ep,) = list(dataset.iterate_episodes())
-    np.testing.assert_allclose(ep.observations, observations, atol=1e-6)  # replayed with both hands and the bodies
+    np.testing.assert_allclose(ep.observations, observations, atol=1e-6)  # replayed with scope, grasper and bodies
     assert ep.terminations[-1]  # every body ended in the cup on replay too
 
 

@@ -166,7 +166,7 @@ def test_tracked_instruments_import_beside_the_scope(tmp_path, name):
     ranges = np.concatenate([i.ranges for i in task.instruments])
     inside = np.clip(traj.instruments[keep], ranges[:, 0], ranges[:, 1])  # a jaw a little past its soft limit
     np.testing.assert_allclose(got.instruments, inside, atol=1e-9)
-    obs, _, _ = replay(env, got)  # replays with both hands where they were
+    obs, _, _ = replay(env, got)  # replays with scope and instrument where they were
     assert len(obs) == len(keep)
     np.savetxt(path, table[:, :-1], delimiter=",", header=",".join([*COLUMNS, *cols[:-1]]), comments="", fmt="%.17g")
     with pytest.raises(PoseError, match=f"missing instrument columns \\['{cols[-1]}'\\]"):

@@ -9,7 +9,7 @@ import fastrl
 from fastrl.data import pose_net
 from fastrl.data.pose_frames import labelled_frames
 from fastrl.data.video_poses import estimator_for, estimator_name, smooth
-from fastrl.runner.video_inputs import video_files
+from fastrl.runner.score.video_inputs import video_files
 
 from ..conftest import spec_file
 

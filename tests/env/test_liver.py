@@ -200,7 +200,7 @@ def test_liver_tour_needs_an_abdomen_and_known_organs(tmp_path):
         load_spec(path)
 
 
-def test_the_experiment_runs_end_to_end_and_resumes_without_redoing(tmp_path):
+def test_the_study_runs_end_to_end_and_resumes_without_redoing(tmp_path):
     runs = tmp_path / "runs"
     args = [
         "run",
@@ -209,13 +209,13 @@ def test_the_experiment_runs_end_to_end_and_resumes_without_redoing(tmp_path):
         str(runs),
         "--no-progress",
         "--set",
-        "experiment.levels=2",
+        "study.levels=2",
         "--set",
-        "experiment.per_level=3",
+        "study.per_level=3",
         "--set",
-        "experiment.best=2",
+        "study.best=2",
         "--set",
-        "experiment.timesteps=512",
+        "study.timesteps=512",
         "--set",
         "train.n_envs=2",
         "--set",

@@ -139,7 +139,7 @@ def test_recording_shows_the_cup_and_the_bodies_moving(tmp_path):
     rc = pytest.importorskip("rerun.chunk")
     from fastrl.agents.expert import ScriptedExpert
     from fastrl.log import RunRecorder
-    from fastrl.runner.evaluate import record_episode
+    from fastrl.runner.train.evaluate import record_episode
 
     env = fastrl.make(spec_file("loose_bodies"), actions={"mode": "rates"}, width=64, height=64)
     expert = ScriptedExpert(env)

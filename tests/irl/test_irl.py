@@ -17,7 +17,7 @@ from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.discriminator import absorbing_states, augment
 from fastrl.irl.fitting import DiscriminatorFit, input_gradient_norm, make_batch
 from fastrl.irl.ranking import RankedRollouts, noisy_expert_rollout, noisy_rollouts_batched
-from fastrl.runner.cloned import ClonedActor
+from fastrl.runner.train.cloned import ClonedActor
 from fastrl.spec import SpecError, load_spec
 from fastrl.spec.columns import discriminator_inputs, reward_inputs
 from fastrl.spec.irl import Degradation, DiscriminatorSettings

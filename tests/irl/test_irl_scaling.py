@@ -76,7 +76,7 @@ def test_the_generator_gets_the_scaled_learned_reward(monkeypatch):
 def test_scaling_defaults_on_for_airl_and_off_for_gail(tmp_path, algorithm, setting, expected):
     from rich.console import Console
 
-    from fastrl.runner.learner import build_learner
+    from fastrl.runner.train.learner import build_learner
 
     value = "null" if setting is None else str(setting).lower()  # null: the default (the FAST specs set true)
     sets = [

@@ -11,7 +11,7 @@ from fastrl.agents.expert import ScriptedExpert
 from fastrl.log import RunRecorder
 from fastrl.log.metrics import summary_markdown
 from fastrl.log.shapes import hemisphere, viridis
-from fastrl.runner.evaluate import record_episode, summarize
+from fastrl.runner.train.evaluate import record_episode, summarize
 
 from ..conftest import spec_file
 

@@ -7,8 +7,8 @@ import time
 import numpy as np
 import pytest
 
-from fastrl.runner.beside import Beside, ChildFailed
-from fastrl.runner.evaluation import evaluate_run
+from fastrl.runner.train.beside import Beside, ChildFailed
+from fastrl.runner.train.evaluation import evaluate_run
 from fastrl.spec import load_spec
 
 

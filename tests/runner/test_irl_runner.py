@@ -18,7 +18,7 @@ from fastrl.data.replay import demonstration_pairs, replay
 from fastrl.data.trajectory import Trajectory
 from fastrl.env import FastEnv
 from fastrl.irl.export import load_networks
-from fastrl.runner.learner import build_learner
+from fastrl.runner.train.learner import build_learner
 from fastrl.spec import load_spec
 
 from ..conftest import spec_file

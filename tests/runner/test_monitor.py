@@ -5,7 +5,7 @@ import json
 import torch
 
 from fastrl.agents.sb3 import build_model, make_vec_env
-from fastrl.runner.monitor import (
+from fastrl.runner.train.monitor import (
     Checkpoints,
     CurvePoints,
     EpisodeTally,

@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 from fastrl.agents.encoder import PixelEncoder, random_shift
 from fastrl.cli import app
 from fastrl.env.fast_env import FastEnv
-from fastrl.runner.saved import load_policy
+from fastrl.runner.runs.saved import load_policy
 from fastrl.spec import load_spec
 
 from ..conftest import spec_file
@@ -135,7 +135,7 @@ def test_cloning_loss_falls_on_frames(tmp_path):
     from fastrl.data.recordings import load_recordings
     from fastrl.data.replay import demonstration_pairs
     from fastrl.model.scope import joint_ranges
-    from fastrl.runner.demos import write_demos
+    from fastrl.runner.train.demos import write_demos
 
     spec = load_spec(PIXELS, ["observation.image.size=32", "train.n_envs=1"])
     write_demos(tmp_path, 2, 0, expert_spec=spec, progress=False)

@@ -13,7 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from fastrl.cli import app
-from fastrl.runner.runfiles import recording_fault
+from fastrl.runner.runs.runfiles import recording_fault
 
 from ..conftest import spec_file
 from .test_stops import TINY
@@ -141,7 +141,7 @@ def test_the_footer_check_reads_only_the_tail(done, tmp_path):
 @pytest.mark.parametrize("damaged", ["meta.json", "eval.json"])
 def test_a_sweep_trial_with_a_damaged_file_counts_as_unfinished(done, tmp_path, damaged):
     """`fastrl sweep --resume` resumes such a trial (rewriting the file) instead of stopping on a traceback."""
-    from fastrl.runner.sweep import is_finished
+    from fastrl.runner.sweep.plan import is_finished
 
     run = tmp_path / done.name
     shutil.copytree(done, run)

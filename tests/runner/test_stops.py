@@ -20,7 +20,7 @@ from fastrl.agents.sb3 import checkpoint_problem
 from fastrl.atomic import DiskFull, atomic_write, write_json
 from fastrl.cli import app
 from fastrl.log.recording import recording_problem
-from fastrl.runner.rundir import latest_checkpoint
+from fastrl.runner.runs.rundir import latest_checkpoint
 
 from ..conftest import spec_file
 
@@ -288,7 +288,7 @@ def test_a_damaged_newest_checkpoint_is_reported_and_resume_falls_back(tmp_path)
 def import_cpu_seconds() -> float:
     """CPU seconds a fresh process spends importing what `fastrl eval` imports before it sets its stop handlers."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    code = "import fastrl.cli, fastrl.cli.training, fastrl.runner, fastrl.runner.saved, torch"
+    code = "import fastrl.cli, fastrl.cli.training, fastrl.runner, fastrl.runner.runs.saved, torch"
     subprocess.run([sys.executable, "-c", code], check=True, env={**os.environ, "CI": "1", "MUJOCO_GL": "egl"})
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)

@@ -7,7 +7,7 @@ from safetensors import safe_open
 from typer.testing import CliRunner
 
 from fastrl.cli import app
-from fastrl.runner.sweep import SweepError, create_sweep, parse_grid, plan, trial_overrides
+from fastrl.runner.sweep.plan import SweepError, create_sweep, parse_grid, plan, trial_overrides
 
 from ..conftest import spec_file
 from .test_runner import TINY, rrd_verify

@@ -87,12 +87,12 @@ def test_an_installed_copy_inside_another_repository_reports_no_commit(tmp_path)
     git = ["git", "-c", "user.name=t", "-c", "user.email=t@t", "-C", str(tmp_path / "project")]
     subprocess.run([*git, "init", "-q"], check=True)
     subprocess.run([*git, "commit", "-q", "--allow-empty", "-m", "someone else's project"], check=True)
-    code = "from fastrl.runner.rundir import git_commit; print(git_commit())"
+    code = "from fastrl.runner.runs.rundir import git_commit; print(git_commit())"
     env = {**os.environ, "PYTHONPATH": str(site)}
     proc = subprocess.run([sys.executable, "-c", code], env=env, cwd=site, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "None"
-    from fastrl.runner.rundir import git_commit
+    from fastrl.runner.runs.rundir import git_commit
 
     if (ROOT / ".git").exists():  # a checkout (not an unpacked sdist): its own commit
         head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True)

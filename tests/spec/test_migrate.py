@@ -16,6 +16,8 @@ CONTEXT = {"base": SPECS}
 
 def in_old_layout(data: dict) -> dict:
     """Spec data written back as 0.2 wrote it: noise in the starts, jitter in the task, no declared resets."""
+    if "study" in data:
+        data["experiment"] = data.pop("study")
     resets = data["episode"].pop("resets", {})
     data["episode"].pop("terminations", None)
     scope = resets.get("scope_noise", {})
@@ -33,7 +35,7 @@ def in_old_layout(data: dict) -> dict:
 def test_a_spec_saved_in_the_old_layout_is_the_same_spec(name):
     today = load_spec(name)
     old = in_old_layout(yaml.safe_load((SPECS / f"{name}.yaml").read_text()))
-    assert "resets" not in old["episode"] and "noise" in old["scope"]["start"]
+    assert "resets" not in old["episode"] and "noise" in old["scope"]["start"] and "study" not in old
     again = TaskSpec.model_validate(old, context=CONTEXT)
     assert again == today and spec_hash(again) == spec_hash(today) and task_hash(again) == task_hash(today)
 

@@ -4,7 +4,7 @@ import pytest
 import yaml
 from pydantic import ValidationError
 
-from fastrl.runner.rundir import write_spec
+from fastrl.runner.runs.rundir import write_spec
 from fastrl.spec import SpecError, TaskSpec, load_spec, spec_hash, task_hash
 
 from ..conftest import spec_file
@@ -52,7 +52,7 @@ def test_an_old_spec_yaml_with_nulls_loads_resolved_the_same_way_and_keeps_its_h
 
 
 def test_without_a_discriminator_its_defaults_wait_for_the_algorithm(tmp_path):
-    spec = load_spec(spec_file("imagecentring"))  # an experiment's spec.yaml is run again as GAIL and as AIRL
+    spec = load_spec(spec_file("imagecentring"))  # a study's spec.yaml is run again as GAIL and as AIRL
     assert spec.irl.discriminator.ignore is None and spec.train.normalize.reward is True
     write_spec(tmp_path, spec, "<mujoco/>")
     gail = load_spec(tmp_path / "spec.yaml", ["irl.algorithm=gail"])

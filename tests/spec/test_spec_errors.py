@@ -385,7 +385,7 @@ def test_json_schema():
         "reward",
         "train",
         "irl",
-        "experiment",
+        "study",
         "evaluate",
     }
     assert set(schema["required"]) == {"name", "scene", "scope", "task", "reward"}

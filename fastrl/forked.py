@@ -1,0 +1,133 @@
+"""The one way fastrl runs work in another process: forked, stops held during fork, Ctrl-C left to the parent."""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing as mp
+import os
+import signal
+import threading
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+
+STOPS = {signal.SIGINT, signal.SIGTERM}
+WATCH_SECONDS = 0.5  # how often a child that must not outlive its parent looks for it
+
+
+class ChildFailed(RuntimeError):
+    """The child process ended without a result (killed, or out of memory)."""
+
+
+def can_fork() -> bool:
+    """Whether this platform forks (the children inherit this process's objects: nothing is pickled)."""
+    return "fork" in mp.get_all_start_methods()
+
+
+def context(fork: bool = True):
+    """The fork context, or where this platform cannot fork or `fork` is false, a fresh process's (the forkserver's,
+    else spawn's: what the child runs must pickle)."""
+    if fork and can_fork():
+        return mp.get_context("fork")
+    return mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn")
+
+
+@contextlib.contextmanager
+def stops_held() -> Iterator[None]:
+    """SIGINT and SIGTERM held back meanwhile: a stop during fork() comes after it, not inside the at-fork hooks,
+    where Python would print it and carry on."""
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, STOPS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
+def start(process) -> None:
+    """Start a multiprocessing Process with stops held during its fork."""
+    with stops_held():
+        process.start()
+
+
+def child_signals(*, term=signal.SIG_DFL) -> None:
+    """In the child: Ctrl-C is the parent's to handle (it reaches the whole process group); SIGTERM does `term`
+    (SIG_DFL: a cancel or the parent's exit ends it quietly; SIG_IGN: the parent stops it by closing its pipe)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, term)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPS)
+
+
+def close_ends(ends) -> None:
+    """In the child: close the parent's pipe ends inherited by the fork, so that a pipe reads as closed (EOF) once
+    the parent dies or closes its end."""
+    for end in ends:
+        end.close()
+
+
+def _watch(parent: int) -> None:
+    """A child's watch: exit at once when the parent is gone (a killed parent never reads the result)."""
+    while os.getppid() == parent:
+        time.sleep(WATCH_SECONDS)
+    os._exit(0)
+
+
+def _begin(parent: int, term, orphan_exit: bool, initializer: Callable | None, initargs: tuple) -> None:
+    """A worker's start: the child's signals, its watch on the parent if asked, then the caller's initializer."""
+    child_signals(term=term)
+    if orphan_exit:
+        threading.Thread(target=_watch, args=(parent,), daemon=True, name="fastrl-watch").start()
+    if initializer is not None:
+        initializer(*initargs)
+
+
+class Worker:
+    """One forked worker process behind a ProcessPoolExecutor: `submit` work, `kill` it, or `shutdown` when done.
+
+    `initializer(*initargs)` runs in the child first and is inherited, not pickled: it may hand over lambdas, a
+    scorer with its networks, a shared counter. With `orphan_exit`, the child exits as soon as this process dies."""
+
+    def __init__(
+        self,
+        *,
+        initializer: Callable | None = None,
+        initargs: tuple = (),
+        term=signal.SIG_DFL,
+        orphan_exit: bool = False,
+    ):
+        self.pool = ProcessPoolExecutor(
+            1,
+            mp_context=context(),
+            initializer=_begin,
+            initargs=(os.getpid(), term, orphan_exit, initializer, initargs),
+        )
+        self.process = None
+
+    def submit(self, fn: Callable, *args) -> Future:
+        """Run a picklable function in the worker; the first call forks it, stops held."""
+        if self.process is not None:
+            return self.pool.submit(fn, *args)
+        with stops_held():
+            future = self.pool.submit(fn, *args)
+            (self.process,) = self.pool._processes.values()  # forked by the first submit (fork: all at once)
+        return future
+
+    def kill(self) -> None:
+        """Kill the worker if it still runs, wait for it, and cancel what was pending."""
+        if self.process is not None and self.process.is_alive():
+            self.process.kill()
+        if self.process is not None:
+            self.process.join()
+        self.pool.shutdown(wait=True, cancel_futures=True)
+
+    def shutdown(self) -> None:
+        """Let the worker finish what it runs, cancel what is pending, and wait for it to exit."""
+        self.pool.shutdown(wait=True, cancel_futures=True)
+
+
+def outcome(future: Future, what: str):
+    """The future's value (its exception, if it raised); ChildFailed if the worker died before it answered."""
+    try:
+        return future.result()
+    except BrokenProcessPool:
+        raise ChildFailed(f"the process computing {what} died") from None

@@ -1,0 +1,1 @@
+"""Run folders: naming, resolved spec, metadata, checkpoints; reading them; loading what a run saved; stops."""

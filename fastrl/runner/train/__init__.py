@@ -1,0 +1,1 @@
+"""Train and resume: a run's stages, its learner, callbacks, warm start, evaluation and demonstrations."""

@@ -1,0 +1,53 @@
+"""Work done beside this process: a forked child computes a result while this process goes on."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from ...forked import ChildFailed, Worker, can_fork, outcome
+
+__all__ = ["Beside", "ChildFailed"]
+
+_FN: Callable[[], Any] | None = None  # the child's copy of the function it computes
+
+
+def _keep(fn: Callable[[], Any]) -> None:
+    """Child start: keep the inherited function (a lambda need not pickle)."""
+    global _FN
+    _FN = fn
+
+
+def _compute() -> Any:
+    """The child's one job: fn(), its value or exception sent back to the parent."""
+    return _FN()
+
+
+class Beside:
+    """`fn()` computed in a forked child from now on; `result()` waits for it, `cancel()` stops it.
+
+    The child ignores Ctrl-C (the parent decides), ends quietly on SIGTERM or a cancel, and exits as soon as this
+    process dies. Where this platform cannot fork, or `fork` is false, `fn()` runs here when `result()` asks."""
+
+    def __init__(self, fn: Callable[[], Any], *, fork: bool = True):
+        self.fn, self.worker, self.child = fn, None, None
+        if fork and can_fork():
+            self.worker = Worker(initializer=_keep, initargs=(fn,), orphan_exit=True)
+            self.future = self.worker.submit(_compute)
+            self.child = self.worker.process
+
+    def result(self) -> Any:
+        """The value of fn() (its exception, if it raised)."""
+        if self.worker is None:
+            return self.fn()
+        try:
+            return outcome(self.future, getattr(self.fn, "__name__", "a result"))
+        finally:
+            self.cancel()
+
+    def cancel(self) -> None:
+        """Stop the child if it still runs and release it (after this, `result()` computes here)."""
+        if self.worker is None:
+            return
+        self.worker.kill()
+        self.worker, self.child = None, None

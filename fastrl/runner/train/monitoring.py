@@ -1,0 +1,81 @@
+"""A run's training callbacks, built from its spec: tally, progress, periodic evaluations, curves, checkpoints."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ...agents.sb3 import batch_policy
+from ...env.fast_env import FastEnv
+from ...log import RunRecorder
+from ...spec.irl import min_steps
+from ...spec.models import TaskSpec
+from .evaluate import evaluate_batched
+from .monitor import (
+    Checkpoints,
+    CurvePoints,
+    EpisodeTally,
+    PeriodicEvaluation,
+    ProgressBar,
+    StopAtSubtasks,
+    TrainingMonitor,
+)
+
+
+def training_monitor(
+    run: Path, spec: TaskSpec, learner, recorder: RunRecorder, progress: bool, episodes: int
+) -> TrainingMonitor:
+    """The run's training callbacks: tally, progress bar, evaluations, curve points, checkpoints, early stop."""
+    tally = EpisodeTally(feature_names=list(spec.reward.features), episodes=episodes)
+    bar = ProgressBar(total=spec.train.timesteps, enabled=progress)
+    evaluator = periodic_evaluator(spec, learner.model, learner.venv)
+    evaluation = None
+    if evaluator is not None:
+        evaluation = PeriodicEvaluation(evaluator=evaluator, every=periodic_every(spec), status=bar.status)
+    points = CurvePoints(
+        run=run,
+        tally=tally,
+        log_every=spec.train.log_every,
+        evaluation=evaluation,
+        stats=learner.stats,
+        sinks=[recorder.log_training, bar.show_point],
+    )
+    train = spec.train
+    checkpoints = Checkpoints(
+        run=run,
+        every=train.checkpoint_every,
+        keep=train.keep_checkpoints,
+        tally=tally,
+        parts=learner.parts,
+        before_save=recorder.flush,
+    )
+    stop_at, after = spec.evaluate.stop_at_subtasks, min_steps(spec.train, spec.irl)
+    stop = []
+    if evaluation and stop_at is not None:
+        stop = [StopAtSubtasks(evaluation=evaluation, at=stop_at, after=after)]
+    return TrainingMonitor([tally, bar, *([evaluation] if evaluation else []), points, checkpoints, *stop])
+
+
+def periodic_every(spec: TaskSpec) -> int:
+    """Timesteps between evaluations during training (0: none): the algorithm's own cadence, or the spec's."""
+    return getattr(spec.train.params(), "periodic_every", None) or spec.evaluate.periodic_every
+
+
+def periodic_evaluator(spec: TaskSpec, model, venv):
+    """Deterministic evaluation of the current policy on the first evaluation seeds, as curve points.
+
+    The episodes run side by side, one policy call for all of them per step."""
+    if not periodic_every(spec):
+        return None
+    seeds = [spec.evaluate.seed + i for i in range(spec.evaluate.periodic_episodes)]
+    envs = [FastEnv(spec) for _ in seeds]
+
+    def run_evaluation() -> dict[str, float]:
+        summary = evaluate_batched(envs, batch_policy(model, venv), seeds)
+        return {
+            "eval/success_rate": summary["success_rate"],
+            "eval/subtasks": summary["subtasks_completed"],
+            "eval/return": summary["return_mean"],
+            "eval/episode_time": summary["episode_time_mean"],
+        }
+
+    return run_evaluation
