@@ -2,16 +2,11 @@
 
 from __future__ import annotations
 
-import numpy as np
-
-from ..agents.expert import ScriptedExpert
 from .skill import SkillProfile
-from .trainee import paced
-
-PAUSE_STEPS = 8  # mean length of a hesitation pause beyond its first step
+from .trainee import Acting, paced
 
 
-class TwoInstrumentTrainee:
+class TwoInstrumentTrainee(Acting):
     """A discrete policy with `act(obs)` and `reset()`, deterministic given its seed; a zero profile is the expert.
 
     Of a SkillProfile it uses the deviations of the scope's and the instruments' actions: `motor_noise` (a random
@@ -20,19 +15,13 @@ class TwoInstrumentTrainee:
     """
 
     def __init__(self, env, profile: SkillProfile, seed: int = 0):
-        u = env.unwrapped
-        if u.task_spec.actions.mode != "discrete":
-            raise ValueError("synthetic trainees act with discrete actions: set actions.mode: discrete")
-        self.env, self.profile, self.seed = u, profile, int(seed)
-        self.expert = ScriptedExpert(env)
-        self.n = u.action_space.n
+        super().__init__(env, profile, seed)
+        self.n = self.env.action_space.n
         self.reset()
 
     def reset(self, seed: int | None = None) -> None:
         """Start an episode: reseed the generator (with `seed` if given) and forget the expert's goal."""
-        if seed is not None:
-            self.seed = int(seed)
-        self.rng = np.random.default_rng(self.seed)
+        self.reseed(seed)
         self.pause, self.subtask = 0, -1
         self.expert.reset()
 
@@ -40,11 +29,7 @@ class TwoInstrumentTrainee:
         """Next discrete action."""
         p = self.profile
         action = int(self.expert.act(obs))  # the expert keeps its goals current even while the trainee idles
-        if self.pause > 0:
-            self.pause -= 1
-            return 0
-        if p.hesitation and self.rng.random() < p.hesitation:
-            self.pause = int(self.rng.poisson(PAUSE_STEPS))
+        if self.paused():
             return 0
         if p.idle and self.subtask != self.env.done_count:  # a new target: plan before the first move
             self.subtask = self.env.done_count

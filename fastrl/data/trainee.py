@@ -22,8 +22,8 @@ DETOUR = 12.0  # increments of pitch and yaw between a detour's wrong place and 
 BUMP_STEPS = 40  # most steps a bump pushes the scope in (the first contact stops it)
 
 
-class Trainee:
-    """A policy with `act(obs)` and `reset()`; deterministic given its seed; a zero profile is the expert."""
+class Acting:
+    """What every synthetic trainee holds: the env, its profile and seed, and the scripted expert it acts through."""
 
     def __init__(self, env, profile: SkillProfile, seed: int = 0):
         u = env.unwrapped
@@ -31,16 +31,37 @@ class Trainee:
             raise ValueError("synthetic trainees act with discrete actions: set actions.mode: discrete")
         self.env, self.profile, self.seed = u, profile, int(seed)
         self.expert = ScriptedExpert(env)
+
+    def reseed(self, seed: int | None) -> None:
+        """A fresh random generator from `seed` if given, else from the trainee's own."""
+        if seed is not None:
+            self.seed = int(seed)
+        self.rng = np.random.default_rng(self.seed)
+
+    def paused(self) -> bool:
+        """Whether the trainee holds still this step: a pause under way, or a hesitation that starts one."""
+        if self.pause > 0:
+            self.pause -= 1
+            return True
+        if self.profile.hesitation and self.rng.random() < self.profile.hesitation:
+            self.pause = int(self.rng.poisson(PAUSE_STEPS))
+            return True
+        return False
+
+
+class Trainee(Acting):
+    """A policy with `act(obs)` and `reset()`; deterministic given its seed; a zero profile is the expert."""
+
+    def __init__(self, env, profile: SkillProfile, seed: int = 0):
+        super().__init__(env, profile, seed)
         self.optics_weights = (self.expert.pivot_weight, self.expert.cable_weight)
         self.steps = self.expert.steps  # size of one increment of each coordinate
-        self.lag = int(round(profile.delay * u.task_spec.episode.control_hz))
+        self.lag = int(round(profile.delay * self.env.task_spec.episode.control_hz))
         self.reset()
 
     def reset(self, seed: int | None = None) -> None:
         """Start an episode: reseed the generator (with `seed` if given) and forget all state."""
-        if seed is not None:
-            self.seed = int(seed)
-        self.rng = np.random.default_rng(self.seed)
+        self.reseed(seed)
         self.phase = self.rng.uniform(0.0, 2.0 * math.pi, 2)
         self._clear()
 
@@ -64,11 +85,7 @@ class Trainee:
         if u.steps == 0 and self.history:  # a new episode without reset(): drop the old one's state
             self._clear()
         self.history.append((u.portal_coordinates(), min(u.done_count, len(u.t_pos) - 1)))
-        if self.pause > 0:
-            self.pause -= 1
-            return 0
-        if p.hesitation and self.rng.random() < p.hesitation:
-            self.pause = int(self.rng.poisson(PAUSE_STEPS))
+        if self.paused():
             return 0
         if self.extra > 0:
             self.extra -= 1

@@ -13,6 +13,7 @@ from matplotlib import colormaps  # not pyplot: the colour map alone
 
 from ..model.compiler import CompiledTask
 from .scene import log_scene
+from .stream import saved_stream
 
 
 def skip_pandas_probe() -> None:
@@ -45,6 +46,12 @@ def _colours(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """viridis-like RGB (uint8) of values scaled from [lo, hi]."""
     t = np.clip((values - lo) / max(hi - lo, 1e-12), 0.0, 1.0)
     return (colormaps["viridis"](t)[:, :3] * 255).astype(np.uint8)
+
+
+def log_coloured_path(rec: rr.RecordingStream, entity: str, tip: np.ndarray, colours: np.ndarray) -> None:
+    """A tip path as points in their colours (a score along it) over a thin grey line."""
+    rec.log(entity, rr.Points3D(tip, colors=colours, radii=0.0008), static=True)
+    rec.log(f"{entity}/path", rr.LineStrips3D([tip], colors=[[200, 200, 200]], radii=0.0002), static=True)
 
 
 def _slug(text: str) -> str:
@@ -106,9 +113,7 @@ def log_assessment(
 ) -> Path:
     """Write an .rrd (same recording id as the run, so the viewer shows it with the run) and return its path."""
     skip_pandas_probe()
-    rec = rr.RecordingStream("fastrl", recording_id=recording_id)
-    rec.set_log_time_enabled(False)
-    rec.save(path)
+    rec = saved_stream(path, recording_id)
     try:
         log_scene(rec, task, root="world")
         values = [s.values for s in scored if s.values is not None]
@@ -117,12 +122,7 @@ def log_assessment(
             base = f"{_slug(group_of(s))}/{_slug(s.name)}"
             v = s.values if s.values is not None else s.time
             colours = _colours(v, lo, hi) if s.values is not None else _colours(v, v.min(), v.max())
-            rec.log(f"world/assessment/{base}", rr.Points3D(s.tip, colors=colours, radii=0.0008), static=True)
-            rec.log(
-                f"world/assessment/{base}/path",
-                rr.LineStrips3D([s.tip], colors=[[200, 200, 200]], radii=0.0002),
-                static=True,
-            )
+            log_coloured_path(rec, f"world/assessment/{base}", s.tip, colours)
             rec.log(
                 f"assessment/xy/{base}",
                 rr.Points2D(s.tip[:, :2] * [1000, -1000], colors=colours, radii=0.4),
@@ -148,9 +148,7 @@ def log_assessment(
 def log_summary(path: Path, recording_id: str, report: dict) -> Path:
     """An .rrd of the group means and the summary table alone (scores over several seeds: no one set of paths)."""
     skip_pandas_probe()
-    rec = rr.RecordingStream("fastrl", recording_id=recording_id)
-    rec.set_log_time_enabled(False)
-    rec.save(path)
+    rec = saved_stream(path, recording_id)
     try:
         _log_summary(rec, report)
         bars = [rrb.BarChartView(origin=f"/assessment/scores/{k}", name=k) for k in report["scores"]]

@@ -13,6 +13,7 @@ from ..model.compiler import CompiledTask
 from .episode import log_episode
 from .layout import BACKGROUND
 from .scene import default_eye, log_scene
+from .stream import saved_stream
 
 WORLD, METRICS = "world/attempt", "metrics/attempt"
 TIP, AIM, MISSED = (255, 30, 230), (0, 215, 240), (150, 150, 150)  # as in the viewer; grey: does not reach
@@ -30,9 +31,7 @@ def log_attempt(
     cue_kind: str = "value",
 ) -> Path:
     """Write an .rrd: scene, episode, suggested tip and view-centre paths at their steps, cue series, feedback."""
-    rec = rr.RecordingStream("fastrl", recording_id=recording_id)
-    rec.set_log_time_enabled(False)
-    rec.save(path)
+    rec = saved_stream(path, recording_id)
     try:
         log_scene(rec, task, root="world")
         log_episode(rec, ep, task, task.spec.scope.fov_deg, world=WORLD, metrics=METRICS)

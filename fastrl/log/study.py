@@ -9,8 +9,9 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from ..model.compiler import CompiledTask
-from .assessment import _colours
+from .assessment import _colours, log_coloured_path
 from .scene import log_scene
+from .stream import saved_stream
 
 PANELS = (("reward", "economy"), ("reward", "safety"), ("value", "economy"), ("value", "safety"))
 
@@ -82,18 +83,14 @@ def log_study(
     path: Path, recording_id: str, task: CompiledTask, scored, learned: dict, result: dict, figure: Path | None = None
 ) -> Path:
     """Write the study's .rrd: anatomy, every camera path coloured by learned value, Table 3 plots."""
-    rec = rr.RecordingStream("fastrl", recording_id=recording_id)
-    rec.set_log_time_enabled(False)
-    rec.save(path)
+    rec = saved_stream(path, recording_id)
     try:
         log_scene(rec, task, root="world")
         algo = "airl" if "airl" in learned else next(iter(learned), None)
         values = [s.values for s in learned[algo]] if algo else [s.time for s in scored]
         lo, hi = np.percentile(np.concatenate(values), [5, 95])
         for s, v in zip(scored, values):
-            base = f"world/procedures/level_{s.skill}/{s.name}"
-            rec.log(base, rr.Points3D(s.tip, colors=_colours(v, lo, hi), radii=0.0008), static=True)
-            rec.log(f"{base}/path", rr.LineStrips3D([s.tip], colors=[[200, 200, 200]], radii=0.0002), static=True)
+            log_coloured_path(rec, f"world/procedures/level_{s.skill}/{s.name}", s.tip, _colours(v, lo, hi))
         rows = result["procedures"]
         skill = np.array([r["skill"] or 0 for r in rows], float)
         colours = _colours(skill, skill.min(), skill.max())

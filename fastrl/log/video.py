@@ -13,6 +13,7 @@ import rerun.blueprint as rrb
 from ..atomic import fsync_dir
 from ..data.cache import cache_dir
 from .assessment import skip_pandas_probe
+from .stream import saved_stream
 
 
 def viewer_env(environ: dict[str, str] | None = None) -> dict[str, str]:
@@ -56,9 +57,7 @@ def write_video_recording(path: Path, videos: list[tuple[str, Path]], app_id: st
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
     path.parent.mkdir(parents=True, exist_ok=True)
-    rec = rr.RecordingStream(app_id)
-    rec.set_log_time_enabled(False)
-    rec.save(tmp)
+    rec = saved_stream(tmp, app_id=app_id)
     try:
         entities = []
         for name, mp4 in videos:

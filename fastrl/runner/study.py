@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from scipy.stats import spearmanr
 
 from ..assess.scoring import Scorer, TrajectoryScores
@@ -22,6 +21,7 @@ from ..model.compiler import CompiledTask, compile_task
 from ..model.scope import joint_ranges
 from ..spec import load_spec
 from ..spec.models import TaskSpec
+from .bars import counting_bar
 from .runs.rundir import latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
 from .runs.runfiles import STUDY_KIND, STUDY_RESULT
 from .runs.stops import stop_on_sigterm
@@ -87,7 +87,7 @@ def write_cohort(spec: TaskSpec, folder: Path, console: Console, progress: bool)
     paths = sorted(folder.glob("*.npz"))
     if len(paths) < n:
         folder.mkdir(parents=True, exist_ok=True)
-        with _bar(console, progress) as bar:
+        with counting_bar(console, progress) as bar:
             task = bar.add_task("synthetic cohort", total=n)
             for traj in make_cohort(spec, cfg.levels, cfg.per_level, cfg.seed):
                 traj.save(folder / f"{traj.meta['subject']}.npz")
@@ -141,25 +141,12 @@ def train_irl(run: Path, algo: str, console: Console, progress: bool) -> Path:
 def _score_all(scorer: Scorer, cohort, label: str, console: Console, progress: bool) -> list[TrajectoryScores]:
     """Replay and score every trajectory of the cohort."""
     out = []
-    with _bar(console, progress) as bar:
+    with counting_bar(console, progress) as bar:
         task = bar.add_task(label, total=len(cohort))
         for name, traj in cohort:
             out.append(scorer.score(traj, name))
             bar.advance(task)
     return out
-
-
-def _bar(console: Console, progress: bool) -> Progress:
-    """A transient progress bar."""
-    return Progress(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn(),
-        console=console,
-        disable=not progress,
-        transient=True,
-    )
 
 
 def correlation(x, y) -> dict:

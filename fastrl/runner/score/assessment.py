@@ -9,7 +9,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from ...assess.figures import deviations, draw_path_figures, plot_distributions
 from ...assess.journal import Journal, identity
@@ -18,6 +17,7 @@ from ...assess.report import SCORING_ERRORS, build_report, csv_text, group_key, 
 from ...assess.scoring import Scorer, TrajectoryScores, normalise
 from ...irl.network_files import has_networks
 from ...spec import load_spec
+from ..bars import counting_bar
 from .archive import SAMPLE, Job, gathered, plan_job, sample_note
 from .helper import Helper, journaling, record_assessment, score_shared
 from .video_inputs import videos_as_trajectories
@@ -169,15 +169,7 @@ def assess(
     helper = Helper(scorer) if parallel else None
     try:
         t0 = time.perf_counter()
-        with Progress(
-            TextColumn("scoring"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeElapsedColumn(),
-            console=console,
-            disable=not progress,
-            transient=True,
-        ) as bar:
+        with counting_bar(console, progress, "scoring") as bar:
             task = bar.add_task("score", total=len(job.todo))
             if address is not None:
                 from .ray_scoring import score_on_ray
