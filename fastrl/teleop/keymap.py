@@ -33,7 +33,7 @@ KEYS = (
     Key(261, "Delete", "roll -", 8),
     Key(268, "Home", "light cable +", 9),
     Key(269, "End", "light cable -", 10),
-    Key(258, "Tab", "switch hand: scope, then each instrument", command="switch"),
+    Key(258, "Tab", "switch what the keys move: scope, then each instrument", command="switch"),
     Key(257, "Return", "suggest a path (with --assist)", command="suggest"),
     Key(256, "Escape", "finish and save", command="quit"),
 )
@@ -43,17 +43,18 @@ KEY_NAMES = {"Prior": "PageUp", "Next": "PageDown", "Return": "Enter", "Escape":
 assert all(DISCRETE_MEANINGS[k.action] for k in KEYS if k.action is not None)
 
 
-def hand_action(action: int, hand: int, sizes: list[int]) -> int:
-    """The discrete action a scope key means for hand `hand` (0: the scope; i: instrument i, sizes[i - 1] coordinates).
+def driven_action(action: int, driven: int, sizes: list[int]) -> int:
+    """The discrete action a scope key means for what the keys move (0: the scope; i: instrument i, of sizes[i - 1]
+    coordinates).
 
     An instrument takes pitch, yaw, insertion and roll from the scope's keys and its jaw from the light cable's.
     """
-    if hand == 0 or action == 0:
+    if driven == 0 or action == 0:
         return action
     coordinate, minus = divmod(action - 1, 2)
-    if coordinate >= sizes[hand - 1]:
+    if coordinate >= sizes[driven - 1]:
         return 0  # the light-cable keys of a probe: no jaw to move
-    return 11 + 2 * (sum(sizes[: hand - 1]) + coordinate) + minus
+    return 11 + 2 * (sum(sizes[: driven - 1]) + coordinate) + minus
 
 
 def key_table() -> tuple[str, str]:

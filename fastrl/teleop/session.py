@@ -15,7 +15,7 @@ from ..data.replay import cue_events
 from ..env.fast_env import FastEnv
 from ..spec import spec_hash, task_hash
 from ..spec.models import TaskSpec
-from .keymap import BY_CODE, hand_action
+from .keymap import BY_CODE, driven_action
 from .writer import AttemptWriter
 
 
@@ -55,7 +55,7 @@ class Session:
         self.keys: deque = deque()
         self.lock = threading.Lock()
         self.held, self.held_until = 0, 0.0
-        self.hand, self.sizes = 0, [len(t.qadr) for t in self.env.task.instruments]
+        self.driven, self.sizes = 0, [len(t.qadr) for t in self.env.task.instruments]
         self.stop: str | None = None
         self.want_suggestion = False
         self.suggestion: Suggestion | None = None
@@ -117,9 +117,9 @@ class Session:
             elif key.command == "suggest":
                 self.want_suggestion = True
             elif key.command == "switch":
-                self.hand, self.held = (self.hand + 1) % (1 + len(self.sizes)), 0
+                self.driven, self.held = (self.driven + 1) % (1 + len(self.sizes)), 0
             else:
-                self.held, self.held_until = hand_action(key.action, self.hand, self.sizes), now + self.hold
+                self.held, self.held_until = driven_action(key.action, self.driven, self.sizes), now + self.hold
         action = self.held if now < self.held_until else 0
         _, _, term, trunc, info = self.env.step(action)
         if pulled:

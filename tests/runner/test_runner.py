@@ -13,6 +13,7 @@ from rerun.chunk import RrdReader
 from typer.testing import CliRunner
 
 from fastrl.cli import app
+from fastrl.spec import load_spec
 
 from ..conftest import spec_file
 
@@ -121,7 +122,7 @@ def test_set_overrides_reach_the_run_and_bad_ones_are_reported(tmp_path):
     assert res.exit_code == 0, res.output
     run = only_run(tmp_path)
     assert run.name.endswith("-s3")
-    assert "dwell: 0.2" in (run / "spec.yaml").read_text()
+    assert load_spec(run / "spec.yaml").task.cue.dwell == 0.2
     bad = run_cli(["run", str(spec_file("periscoping")), "--set", "train.ppo.n_step=64"], tmp_path / "x")
     assert bad.exit_code == 2
     assert "train.ppo.n_step" in bad.output and "did you mean 'n_steps'" in bad.output

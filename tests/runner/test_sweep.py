@@ -8,6 +8,7 @@ from typer.testing import CliRunner
 
 from fastrl.cli import app
 from fastrl.runner.sweep.plan import SweepError, create_sweep, parse_grid, plan, trial_overrides
+from fastrl.spec import load_spec
 
 from ..conftest import spec_file
 from .test_runner import TINY, rrd_verify
@@ -96,7 +97,7 @@ def test_sweep_on_a_two_node_cluster_runs_trials_on_both_nodes(cluster, tmp_path
             assert (run / name).exists(), (run, name)
         assert json.loads((run / "meta.json").read_text())["status"] == "done"
         assert json.loads((run / "trial.json").read_text())["torch_threads"] == 1
-        assert "workers: 1" in (run / "spec.yaml").read_text()  # one CPU per trial: no env worker processes
+        assert load_spec(run / "spec.yaml").train.workers == 1  # one CPU per trial: no env worker processes
         assert "1 file verified" in rrd_verify(run / "recording.rrd")
         with safe_open(str(run / "networks" / "value.safetensors"), "pt") as f:  # a fresh run's standard file
             assert json.loads(f.metadata()["fastrl"])["parts"]["v"][0]["type"] == "linear" and "v.0.weight" in f.keys()
