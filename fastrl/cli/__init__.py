@@ -11,7 +11,9 @@ from rich.console import Console
 from rich.markup import escape
 
 from ..about import version_line
-from ..spec import SpecError, json_schema, load_spec
+from ..bundled import find_spec
+from ..spec import SpecError, json_schema, load_spec, read_yaml
+from ..spec.migrate import OLD_LAYOUT, in_old_layout
 from . import typer_flags  # noqa: F401  (before any command: the --help of every one)
 
 if TYPE_CHECKING:
@@ -137,6 +139,8 @@ def check(
         spec = task.spec
         summary = f"{spec.task.kind}, {len(task.targets)} subtasks, {spec.actions.mode}"
         out.print(f"[green]ok[/]  {escape(str(path))}  ({summary})")
+        if in_old_layout(read_yaml(find_spec(path))[0]):
+            out.print(f"    {OLD_LAYOUT}", markup=False)
     if bad:
         raise typer.Exit(code=2)
 

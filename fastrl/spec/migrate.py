@@ -8,6 +8,10 @@ from typing import Any
 from .base import _fail
 
 PORTAL_NOISE = ("pitch_deg", "yaw_deg", "insertion", "roll_deg", "cable_deg")
+OLD_LAYOUT = (
+    "written in the 0.2 layout and read as 0.3: the start noise and task.jitter are now episode.resets "
+    "(scope_noise, instrument_noise, avatar_jitter), experiment is now study"
+)
 
 
 def upgraded(data: Any) -> Any:
@@ -15,7 +19,7 @@ def upgraded(data: Any) -> Any:
 
     0.2 drew the scope's and every instrument's noise at each start even where it was zero, so the upgrade declares
     both (zeros included) and the random draws stay in the same order; the jitter drew nothing at zero."""
-    if not isinstance(data, dict) or not (_old(data) or "experiment" in data):
+    if not in_old_layout(data):
         return data
     data = copy.deepcopy(data)
     if "experiment" in data and "study" not in data:
@@ -39,6 +43,11 @@ def upgraded(data: Any) -> Any:
     if isinstance(episode, dict):
         episode.setdefault("resets", resets)
     return data
+
+
+def in_old_layout(data: Any) -> bool:
+    """Whether spec data is written in the 0.2 layout (what `upgraded` changes)."""
+    return isinstance(data, dict) and (_old(data) or "experiment" in data)
 
 
 def _old(data: dict) -> bool:

@@ -73,3 +73,15 @@ def test_an_attempt_carrying_an_old_layout_spec_is_checked_by_its_task_hash():
     attempt.meta["task_hash"] = "fedcba9876543210"
     with pytest.raises(TrajectoryError, match="task_hash"):
         spec_of_trajectory(attempt)
+
+
+def test_check_says_a_spec_is_in_the_old_layout_and_where_its_fields_went(tmp_path):
+    from typer.testing import CliRunner
+
+    from fastrl.cli import app
+
+    path = tmp_path / "old.yaml"
+    path.write_text(yaml.safe_dump(in_old_layout(yaml.safe_load((SPECS / "tracelines.yaml").read_text()))))
+    res = CliRunner().invoke(app, ["check", str(path), "tracelines"])
+    assert res.exit_code == 0 and res.output.count("ok ") == 2
+    assert res.output.count("0.2 layout") == 1 and "episode.resets" in res.output
