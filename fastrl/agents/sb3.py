@@ -183,25 +183,41 @@ def load_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv | None, parts
     return state
 
 
-def policy_function(model: BaseAlgorithm, venv: VecEnv | None):
-    """obs -> deterministic action, applying the training's observation normalisation."""
+def policy_function(model: BaseAlgorithm, venv: VecEnv | None, sampling_seed: int | None = None):
+    """obs -> action, applying the training's observation normalisation: the most likely action, or with
+    `sampling_seed` one sampled from the policy (reproducibly)."""
     norm = venv if isinstance(venv, VecNormalize) and venv.norm_obs else None
+    predict = predictor(model, sampling_seed)
 
     def act(obs):
         one = {k: v[None] for k, v in obs.items()} if isinstance(obs, dict) else obs[None]  # a Dict's image and state
-        x = norm.normalize_obs(one) if norm is not None else one
-        action, _ = model.predict(x, deterministic=True)
+        action = predict(norm.normalize_obs(one) if norm is not None else one)
         return action[0] if action.ndim > 1 else int(action[0])
 
     return act
 
 
-def batch_policy(model: BaseAlgorithm, venv: VecEnv | None):
-    """A batch of observations -> their deterministic actions, applying the training's observation normalisation."""
+def batch_policy(model: BaseAlgorithm, venv: VecEnv | None, sampling_seed: int | None = None):
+    """A batch of observations -> their actions (most likely, or sampled), applying the observation normalisation."""
     norm = venv if isinstance(venv, VecNormalize) and venv.norm_obs else None
+    predict = predictor(model, sampling_seed)
 
     def act(obs: np.ndarray) -> np.ndarray:
-        actions, _ = model.predict(norm.normalize_obs(obs) if norm is not None else obs, deterministic=True)
-        return actions
+        return predict(norm.normalize_obs(obs) if norm is not None else obs)
 
     return act
+
+
+def predictor(model: BaseAlgorithm, sampling_seed: int | None):
+    """observations -> actions: the most likely; with a seed, sampled from draws of their own (torch's global
+    random state, which training draws from, is left as it was)."""
+    if sampling_seed is None:
+        return lambda x: model.predict(x, deterministic=True)[0]
+    seeds = np.random.default_rng(sampling_seed)
+
+    def sample(x):
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(int(seeds.integers(2**62)))
+            return model.predict(x, deterministic=False)[0]
+
+    return sample

@@ -160,10 +160,15 @@ class Train(Strict):
 
 
 class Evaluate(Strict):
-    """Deterministic evaluation episodes after training, and what of them goes into the recording."""
+    """Evaluation episodes after training (and during it), and what of them goes into the recording."""
 
     episodes: int = Field(20, ge=1)
     seed: int = Field(10_000, ge=0)
+    sampled: bool = Field(
+        False,
+        description="act with actions sampled from the policy, as it trains (random draws seeded by `seed`), "
+        "not its most likely ones",
+    )
     image_every: int = Field(4, ge=0, description="log the endoscope image every k steps (0: never)")
     image_size: tuple[int, int] = Field((128, 128), description="width, height of logged endoscope images")
     record_episodes: int = Field(20, ge=0, description="how many evaluation episodes go into the recording")
@@ -176,3 +181,8 @@ class Evaluate(Strict):
         le=1,
         description="stop training once an evaluation during training completes this share of subtasks",
     )
+
+    @property
+    def sampling_seed(self) -> int | None:
+        """The seed of the evaluation's sampled actions (None: the most likely actions)."""
+        return self.seed if self.sampled else None

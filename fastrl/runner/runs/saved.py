@@ -22,11 +22,11 @@ def load_policy(run: Path) -> tuple[TaskSpec, object]:
 
 
 def checkpoint_policy(spec: TaskSpec, checkpoint: Path):
-    """The deterministic policy (obs -> action) saved in one checkpoint directory."""
+    """The policy (obs -> action) saved in one checkpoint directory, acting as the spec evaluates it."""
     venv = make_vec_env(spec, 1, spec.train.seed)
     with warnings.catch_warnings():  # SB3 warns that one env cannot fill a training batch: we only act
         warnings.simplefilter("ignore", UserWarning)
         model = build_model(spec, venv)
     load_checkpoint(checkpoint, model, venv)
     venv.training = False
-    return policy_function(model, venv)
+    return policy_function(model, venv, spec.evaluate.sampling_seed)

@@ -61,7 +61,8 @@ def periodic_every(spec: TaskSpec) -> int:
 
 
 def periodic_evaluator(spec: TaskSpec, model, venv):
-    """Deterministic evaluation of the current policy on the first evaluation seeds, as curve points.
+    """Evaluation of the current policy on the first evaluation seeds (its sampled actions if the spec says so), as
+    curve points.
 
     The episodes run side by side, one policy call for all of them per step."""
     if not periodic_every(spec):
@@ -70,7 +71,7 @@ def periodic_evaluator(spec: TaskSpec, model, venv):
     envs = [FastEnv(spec) for _ in seeds]
 
     def run_evaluation() -> dict[str, float]:
-        summary = evaluate_batched(envs, batch_policy(model, venv), seeds)
+        summary = evaluate_batched(envs, batch_policy(model, venv, spec.evaluate.sampling_seed), seeds)
         return {
             "eval/success_rate": summary["success_rate"],
             "eval/subtasks": summary["subtasks_completed"],

@@ -241,7 +241,7 @@ def _stages(
     )
     check_space(recorder.path, 0)  # the reserve, before episodes stream into the recording
     try:
-        results = evaluate_run(spec, policy_function(model, venv), recorder, console)
+        results = evaluate_run(spec, policy_function(model, venv, spec.evaluate.sampling_seed), recorder, console)
     except KeyboardInterrupt as stop:
         with shielded():
             update_meta(run, status="trained, evaluation interrupted")
