@@ -27,18 +27,28 @@ def upgraded(data: Any) -> Any:
     if not _old(data):
         return data
     resets = {}
-    scope_start = (data.get("scope") or {}).get("start")
-    noise = scope_start.pop("noise", None) if isinstance(scope_start, dict) else None
-    resets["scope_noise"] = dict(zip(PORTAL_NOISE, noise if isinstance(noise, list | tuple) else [0.0] * 5))
-    instruments = [i for i in data.get("instruments") or [] if isinstance(i, dict)]
-    noises = [tuple((i.get("start") or {}).pop("noise", (0.0,) * 4)) for i in instruments]
+    scope = data.get("scope")
+    scope_start = scope.get("start") if isinstance(scope, dict) else None
+    if isinstance(scope_start, dict) and _numbers(scope_start.get("noise"), 5):
+        resets["scope_noise"] = dict(zip(PORTAL_NOISE, scope_start.pop("noise")))
+    elif not isinstance(scope_start, dict) or "noise" not in scope_start:
+        resets["scope_noise"] = dict.fromkeys(PORTAL_NOISE, 0.0)  # 0.2's default, drawn all the same
+    noises = []
+    for instrument in data.get("instruments") if isinstance(data.get("instruments"), list) else []:
+        start = instrument.get("start") if isinstance(instrument, dict) else None
+        if isinstance(start, dict) and _numbers(start.get("noise"), 4):
+            noises.append(tuple(start.pop("noise")))
+        elif not isinstance(start, dict) or "noise" not in start:
+            noises.append((0.0,) * 4)  # 0.2's default, drawn all the same
     if noises:
         if len(set(noises)) > 1:
             _fail("instruments.1.start.noise", "0.3 has one instrument_noise for every instrument: give them one noise")
         resets["instrument_noise"] = dict(zip(PORTAL_NOISE, noises[0]))
-    jitter = (data.get("task") or {}).pop("jitter", None)
-    if isinstance(jitter, list | tuple) and any(jitter):
-        resets["avatar_jitter"] = dict(zip(("plate", "dome"), jitter))
+    task = data.get("task")
+    if isinstance(task, dict) and _numbers(task.get("jitter"), 2):
+        jitter = task.pop("jitter")
+        if any(jitter):
+            resets["avatar_jitter"] = dict(zip(("plate", "dome"), jitter))
     episode = data.setdefault("episode", {})
     if isinstance(episode, dict):
         episode.setdefault("resets", resets)
@@ -58,4 +68,13 @@ def _old(data: dict) -> bool:
         (isinstance(start, dict) and "noise" in start)
         or any(isinstance(i, dict) and isinstance(i.get("start"), dict) and "noise" in i["start"] for i in instruments)
         or (isinstance(data.get("task"), dict) and "jitter" in data["task"])
+    )
+
+
+def _numbers(value: Any, n: int) -> bool:
+    """Whether a 0.2 field holds the n numbers it held then (anything else is left for the spec's checks to name)."""
+    return (
+        isinstance(value, list | tuple)
+        and len(value) == n
+        and all(isinstance(x, int | float) and not isinstance(x, bool) for x in value)
     )

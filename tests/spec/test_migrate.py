@@ -85,3 +85,20 @@ def test_check_says_a_spec_is_in_the_old_layout_and_where_its_fields_went(tmp_pa
     res = CliRunner().invoke(app, ["check", str(path), "tracelines"])
     assert res.exit_code == 0 and res.output.count("ok ") == 2
     assert res.output.count("0.2 layout") == 1 and "episode.resets" in res.output
+
+
+@pytest.mark.parametrize(
+    "field, value",
+    [("scope.start.noise", "[5, 5]"), ("scope.start.noise", "lots"), ("task.jitter", "[1, 2, 3]"), ("scope", "[1]")],
+)
+def test_a_malformed_old_field_is_named_not_a_traceback(tmp_path, field, value):
+    data = in_old_layout(yaml.safe_load((SPECS / "triangulation.yaml").read_text()))
+    node, *path, last = [data, *field.split(".")]
+    for key in path:
+        node = node[key]
+    node[last] = yaml.safe_load(value)
+    spec_file_ = tmp_path / "bad.yaml"
+    spec_file_.write_text(yaml.safe_dump(data))
+    with pytest.raises(SpecError) as e:
+        load_spec(spec_file_)
+    assert e.value.errors and all(issue.path.startswith(field.split(".")[0]) for issue in e.value.errors)
