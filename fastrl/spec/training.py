@@ -174,7 +174,7 @@ class Evaluate(Strict):
     record_episodes: int = Field(20, ge=0, description="how many evaluation episodes go into the recording")
     expert: bool = Field(True, description="also evaluate the scripted expert on the same seeds, for reference")
     periodic_every: int = Field(0, ge=0, description="timesteps between evaluations during training (0: none)")
-    periodic_episodes: int = Field(10, ge=1, description="deterministic episodes per evaluation during training")
+    periodic_episodes: int = Field(10, ge=1, description="episodes per evaluation during training")
     stop_at_subtasks: float | None = Field(
         None,
         gt=0,
