@@ -11,6 +11,8 @@ from ..terms.registry import Registry
 from .base import Pos, Strict, _fail, _raise
 from .limits import MAX_EPISODE_STEPS, MAX_SECONDS
 
+DEFAULT_TERMINATIONS = {"subtasks_done": {}}  # every subtask done: the task's end
+
 
 class Episode(Strict):
     """Control rate, physics substeps, time limit (a truncation), what each start randomises and what ends it."""
@@ -22,7 +24,7 @@ class Episode(Strict):
         {}, description="reset terms by name with their parameters (fastrl.terms.episode), applied at every start"
     )
     terminations: dict[str, dict[str, Any]] = Field(
-        {"subtasks_done": {}},
+        DEFAULT_TERMINATIONS,
         min_length=1,
         description="termination terms by name with their parameters: the episode ends when any holds",
     )

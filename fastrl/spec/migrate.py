@@ -1,13 +1,14 @@
-"""Specs written before today's layout (run folders, trajectories that carry their spec, Minari datasets), upgraded."""
+"""Specs of the 0.2 layout (run folders, trajectories that carry their spec, datasets) upgraded, and written back."""
 
 from __future__ import annotations
 
 import copy
 from typing import Any
 
+from ..terms.episode import PORTAL_NOISE as NOISE_DOMAINS
 from .base import _fail
 
-PORTAL_NOISE = ("pitch_deg", "yaw_deg", "insertion", "roll_deg", "cable_deg")
+PORTAL_NOISE = tuple(NOISE_DOMAINS)  # 0.2's noise lists, in this order
 OLD_LAYOUT = (
     "written in the 0.2 layout and read as 0.3: the start noise and task.jitter are now episode.resets "
     "(scope_noise, instrument_noise, avatar_jitter), experiment is now study"
@@ -53,6 +54,21 @@ def upgraded(data: Any) -> Any:
     if isinstance(episode, dict):
         episode.setdefault("resets", resets)
     return data
+
+
+def as_recorded(world: dict, resets: dict) -> dict:
+    """A dumped world with the reset terms written where recordings were hashed with them (before spec 0.3.0).
+
+    Trajectories carry the task hash they were recorded in, and scoring refuses another: declaring the start
+    noise and the jitter as terms must not turn every recording into another task's."""
+    noise = resets.get("scope_noise", {})
+    world["scope"]["start"]["noise"] = [float(noise.get(k, 0.0)) for k in PORTAL_NOISE]
+    noise = resets.get("instrument_noise", {})
+    for instrument in world.get("instruments", []):
+        instrument["start"]["noise"] = [float(noise.get(k, 0.0)) for k in PORTAL_NOISE[:4]]
+    jitter = resets.get("avatar_jitter", {})
+    world["task"]["jitter"] = [float(jitter.get("plate", 0.0)), float(jitter.get("dome", 0.0))]
+    return world
 
 
 def in_old_layout(data: Any) -> bool:

@@ -15,7 +15,7 @@ from ..env.fast_env import FastEnv
 from ..irl.networks import has_networks, load_networks
 from ..log.attempt import log_attempt
 from ..spec import load_spec, spec_hash, task_hash
-from ..spec.migrate import upgraded
+from ..spec.migrate import in_old_layout
 from ..spec.models import TaskSpec
 
 
@@ -41,7 +41,7 @@ def spec_of_trajectory(traj: Trajectory, spec_path: Path | None = None) -> TaskS
         carried = traj.meta["task_spec"]
         spec = TaskSpec.model_validate(carried)
         # a spec carried in an earlier layout hashes otherwise once upgraded; its task hash is kept: check that
-        key, ours = ("spec_hash", spec_hash(spec)) if upgraded(carried) is carried else ("task_hash", task_hash(spec))
+        key, ours = ("task_hash", task_hash(spec)) if in_old_layout(carried) else ("spec_hash", spec_hash(spec))
         theirs = traj.meta.get(key)
         if theirs is not None and theirs != ours:
             raise TrajectoryError(f"the spec carried in the file does not match its {key} {theirs}")
