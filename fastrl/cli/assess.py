@@ -29,7 +29,11 @@ def assess_cohort(
     set_: SetOpt = None,
     output: Annotated[
         Path | None,
-        typer.Option("-o", "--output", help="JSON report (CSV, PNGs and .rrd beside it; default RUN/scores.json)"),
+        typer.Option(
+            "-o",
+            "--output",
+            help="JSON report, or a folder for scores.json (CSV, PNGs and .rrd beside it; default RUN/scores.json)",
+        ),
     ] = None,
     runs: RunsOpt = Path("runs"),
     pictures: Annotated[bool, typer.Option(help="write the PNG figures and the Rerun recording")] = True,
@@ -41,7 +45,7 @@ def assess_cohort(
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
     from ..runner.protocol import DEFAULT_BY, run_protocol
     from ..spec import SpecError
-    from .score import print_report
+    from .score import print_report, report_file
     from .stops import report_stop
 
     try:
@@ -53,7 +57,7 @@ def assess_cohort(
             algorithm,
             list(set_ or []),
             runs,
-            output,
+            report_file(output),
             console=err,
             progress=progress,
             pictures=pictures,

@@ -31,7 +31,10 @@ def score(
     output: Annotated[
         Path | None,
         typer.Option(
-            "-o", "--output", help="JSON report (CSV, PNGs and .rrd beside it; default RUN_DIR/assessment/scores.json)"
+            "-o",
+            "--output",
+            help="JSON report, or a folder for scores.json (CSV, PNGs and .rrd beside it; "
+            "default RUN_DIR/assessment/scores.json)",
         ),
     ] = None,
     references: Annotated[int, typer.Option(help="episodes per normalisation reference")] = 3,
@@ -54,6 +57,7 @@ def score(
     if (run is None) == (spec is None):
         err.print("give --run RUN_DIR, or --spec SPEC", markup=False)
         raise typer.Exit(code=2)
+    output = report_file(output)
     if run is not None:
         from .runcheck import check_run
 
@@ -94,6 +98,13 @@ def score(
     out.print(f"scored {n} trajectories{resumed} in {secs:.2f} s (replay included); {len(report['problems'])} skipped")
     for kind, path in result.files.items():
         out.print(f"  {kind}: {escape(str(path))}")
+
+
+def report_file(output: Path | None) -> Path | None:
+    """The JSON report's path: `output` itself, or scores.json in it where it is a folder or has no suffix."""
+    if output is not None and (output.is_dir() or not output.suffix):
+        return output / "scores.json"
+    return output
 
 
 def print_report(report: dict) -> None:

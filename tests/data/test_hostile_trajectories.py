@@ -208,10 +208,11 @@ def assert_each_named(messages: list[str], folder: Path, expected: dict[str, str
 
 
 def test_score_names_and_skips_each_bad_file_and_scores_the_rest(tmp_path):
-    """`fastrl score` on a folder: exit 0, every bad file skipped by name, the good one scored."""
+    """`fastrl score` on a folder: exit 0, every bad file skipped by name, the good one scored (-o a folder)."""
     folder, expected = bad_folder(tmp_path)
-    out = tmp_path / "scores.json"
-    args = ["score", str(folder), "--spec", str(spec_file("tracelines")), "-o", str(out)]
+    (tmp_path / "out").mkdir()
+    out = tmp_path / "out" / "scores.json"
+    args = ["score", str(folder), "--spec", str(spec_file("tracelines")), "-o", str(out.parent)]
     res = CliRunner().invoke(app, [*args, "--references", "1", "--no-pictures", "--no-progress"])
     assert res.exit_code == 0, res.output
     assert "Traceback" not in res.output and "scored 1 trajectories" in res.stdout
