@@ -180,7 +180,7 @@ def compile_(
 def demos(
     source: Annotated[Path | None, typer.Argument(metavar="RUN_DIR", help="a trained run", show_default=False)] = None,
     expert: Annotated[Path | None, typer.Option(metavar="SPEC", help="use the scripted expert on SPEC")] = None,
-    n: Annotated[int, typer.Option("-n", help="number of trajectories")] = 20,
+    n: Annotated[int, typer.Option("-n", min=1, help="number of trajectories")] = 20,
     output: Annotated[Path, typer.Option("-o", "--output", help="folder for the .npz files")] = Path("demos"),
     seed: Annotated[int, typer.Option(help="seed of the first episode")] = 0,
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
@@ -193,6 +193,9 @@ def demos(
 
     if (source is None) == (expert is None):
         err.print("give RUN_DIR, or --expert SPEC", markup=False)
+        raise typer.Exit(code=2)
+    if output.exists() and not output.is_dir():
+        err.print(f"-o {output}: a file is there; give a folder for the .npz files", markup=False)
         raise typer.Exit(code=2)
     try:
         paths = write_demos(output, n, seed, run=source, expert_spec=expert, progress=progress, video=video)
@@ -258,7 +261,7 @@ def irl(
 def eval_(
     run_dir: Annotated[Path | None, typer.Argument(metavar="RUN_DIR", show_default=False)] = None,
     expert: Annotated[Path | None, typer.Option(metavar="SPEC", help="evaluate the scripted expert on SPEC")] = None,
-    episodes: Annotated[int | None, typer.Option(help="number of episodes (default: the spec's)")] = None,
+    episodes: Annotated[int | None, typer.Option(min=1, help="number of episodes (default: the spec's)")] = None,
     output: Annotated[Path | None, typer.Option("-o", "--output", help="write the figures as JSON")] = None,
 ) -> None:
     """Re-evaluate a saved run (deterministic episodes), or the scripted expert on a spec."""

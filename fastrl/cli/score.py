@@ -37,7 +37,7 @@ def score(
             "default RUN_DIR/assessment/scores.json)",
         ),
     ] = None,
-    references: Annotated[int, typer.Option(help="episodes per normalisation reference")] = 3,
+    references: Annotated[int, typer.Option(min=1, help="episodes per normalisation reference")] = 3,
     pictures: Annotated[bool, typer.Option(help="write the PNG figures and the Rerun recording")] = True,
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
     address: Annotated[

@@ -48,7 +48,7 @@ def _finish(batch, verb: str, unit: str) -> None:
     )
     if len(batch.written) == 1:
         out.print(f"  {escape(str(batch.written[0][1]))}")
-    if batch.errors:
+    if batch.errors or not batch.written:
         raise typer.Exit(code=2)
 
 

@@ -211,3 +211,25 @@ def test_console_script(tmp_path):
     assert proc.stdout.startswith(f"ok  {GOOD[1]}  (periscoping, 5 subtasks, discrete)")
     assert proc.stderr.startswith(f"{bad}:6: the list '[...]' opened at line 6 is not closed with ']'")
     assert "Traceback" not in proc.stderr and "\x1b[" not in proc.stdout  # no colour codes in a pipe
+
+
+@pytest.mark.parametrize(
+    ("args", "says"),
+    [
+        (("eval", "--expert", "tracelines", "--episodes", "0"), "--episodes"),
+        (("demos", "--expert", "tracelines", "-n", "0"), "-n"),
+        (("demos", "--expert", "tracelines", "-n", "1", "-o", "{file}"), "a file is there"),
+        (("score", "{folder}", "--spec", "tracelines", "--references", "0"), "--references"),
+        (("score", "{folder}", "--spec", "tracelines", "--no-pictures"), "no trajectory could be scored"),
+        (("render-video", "{folder}", "-o", "{tmp}/v.mp4"), "wrote 0 videos"),
+    ],
+)
+def test_out_of_domain_options_exit_2_with_one_message(tmp_path, args, says):
+    """A count below one, a file where a folder goes, a folder with nothing in it: exit 2, a message, no traceback."""
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "a.txt").write_text("not a folder")
+    where = {"file": tmp_path / "a.txt", "folder": tmp_path / "empty", "tmp": tmp_path}
+    result = invoke(*(a.format(**where) for a in args))
+    assert result.exit_code == 2, result.output
+    assert says in result.output and "Traceback" not in result.output
+    assert (tmp_path / "a.txt").read_text() == "not a folder"

@@ -15,6 +15,7 @@ from ...assess.journal import Journal, identity
 from ...assess.references import expert_paths, references_for
 from ...assess.report import SCORING_ERRORS, build_report, csv_text, group_key, problem_text, row, trajectory_files
 from ...assess.scoring import Scorer, TrajectoryScores, normalise
+from ...bundled import find_spec
 from ...irl.network_files import has_networks
 from ...spec import load_spec
 from ..bars import counting_bar
@@ -143,6 +144,7 @@ def assess(
     of them is kept whole for the pictures, the rest as scalars."""
     console = console or Console(stderr=True)
     t0 = time.perf_counter()
+    spec_path = None if spec_path is None else find_spec(spec_path)  # a bundled spec's name, as elsewhere
     scorer, recording_id = load_scorer(run, spec_path)
     paths, seconds = outputs_for(output, run), {"load": time.perf_counter() - t0}
     places = [run, run.parent] if run is not None else []
