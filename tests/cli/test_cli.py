@@ -220,7 +220,7 @@ def test_console_script(tmp_path):
         (("demos", "--expert", "tracelines", "-n", "0"), "-n"),
         (("demos", "--expert", "tracelines", "-n", "1", "-o", "{file}"), "a file is there"),
         (("score", "{folder}", "--spec", "tracelines", "--references", "0"), "--references"),
-        (("score", "{folder}", "--spec", "tracelines", "--no-pictures"), "no trajectory could be scored"),
+        (("score", "{folder}", "--spec", "tracelines", "-o", "{tmp}/r.json"), "no trajectory could be"),
         (("render-video", "{folder}", "-o", "{tmp}/v.mp4"), "wrote 0 videos"),
     ],
 )
