@@ -63,6 +63,9 @@ def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) 
     arch = {"pi": net, kind.critic: net}
     algo = LeanSAC if params.pop("lean_update", False) else ALGOS[kind.name]
     torch.set_num_threads(1)
+    # the checks of every distribution's arguments took 30% of each rollout's policy call (528 -> 370 us for 32
+    # observations) and PPO's updates pay them too; they change no number, the policy's outputs are finite
+    torch.distributions.Distribution.set_default_validate_args(False)
     policy, policy_kwargs = "MlpPolicy", {"net_arch": arch, "activation_fn": act}
     critic_columns = value_inputs(spec)
     if critic_columns is not None and kind.name == "PPO":
