@@ -79,7 +79,8 @@ def reencode(
 
 
 def taus(report: dict, labels: dict[str, int]) -> dict:
-    """Kendall tau-b against the labels of each score, the labels joined by subject (the file's stem)."""
+    """Kendall tau-b against the labels of each score, the labels joined by subject (the file's stem); a report of
+    several seeds ranks each learned score by its mean over them (the report's own figure)."""
     from fastrl.assess.ranking import rank_correlations
     from fastrl.assess.report import HIGHER_IS_BETTER, NORMALISED
 
@@ -93,11 +94,13 @@ def taus(report: dict, labels: dict[str, int]) -> dict:
         sign = 1.0 if HIGHER_IS_BETTER[k] else -1.0
         labelled = [labels[subject[r["file"]]] for r in rows]
         out[k] = rank_correlations([sign * r[raw] for r in rows], labelled)["kendall_tau_b"]
+    for k in report.get("seeds", {}).get("agreement", {}):
+        out[k] = report["ranking"][k]["kendall_tau_b"]
     return out
 
 
-def protocol(inputs: Path, task: str, seed: int, root: Path):
-    """`fastrl assess INPUTS --top 10 --by time`, quiet; (what it did, seconds)."""
+def protocol(inputs: Path, task: str, seed: int, root: Path, seeds: int = 1):
+    """`fastrl assess INPUTS --top 10 --by time [--seeds N]`, quiet; (what it did, seconds)."""
     from rich.console import Console
 
     from fastrl.runner.protocol import run_protocol
@@ -113,6 +116,7 @@ def protocol(inputs: Path, task: str, seed: int, root: Path):
         console=Console(stderr=True, quiet=True),
         progress=False,
         pictures=False,
+        seeds=seeds,
     )
     return done, time.perf_counter() - t0
 
@@ -146,6 +150,7 @@ def main() -> None:
     parser.add_argument("--task", default="tracelines")
     parser.add_argument("--families", nargs="+", default=["classic"])
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seeds", type=int, default=1, help="learn on this many seeds and rank by their mean")
     parser.add_argument("--root", type=Path, default=ROOT)
     parser.add_argument("--skip-kinematic", action="store_true")
     parser.add_argument("--skip-reencode", action="store_true")
@@ -169,9 +174,10 @@ def main() -> None:
         mp4 = videos(folder, base / "videos")
         learned_from, done = {"video": mp4, **({} if args.skip_kinematic else {"kinematic": folder})}, {}
         for name, inputs in learned_from.items():
-            done[name], secs = protocol(inputs, args.task, args.seed, base / "runs")
+            done[name], secs = protocol(inputs, args.task, args.seed, base / "runs", args.seeds)
             taus_b = taus(done[name].assessment.report, labels)
-            keep({"family": family, "input": name, "tau_b": taus_b, "seconds": secs, "run": str(done[name].run)})
+            row = {"family": family, "input": name, "seeds": args.seeds, "tau_b": taus_b, "seconds": secs}
+            keep({**row, "run": str(done[name].run)})
         if args.skip_reencode:
             continue
         learned = done["video"].learned[0]
