@@ -26,6 +26,13 @@ def assess_cohort(
     seeds: Annotated[
         int, typer.Option(help="learn N scorers (train.seed and the next ones): mean, spread and agreement")
     ] = 1,
+    address: Annotated[
+        str | None,
+        typer.Option(
+            metavar="ADDR",
+            help="learn the seeds at once as Ray tasks, one CPU each: a cluster's address, or local (this machine)",
+        ),
+    ] = None,
     set_: SetOpt = None,
     output: Annotated[
         Path | None,
@@ -62,6 +69,7 @@ def assess_cohort(
             progress=progress,
             pictures=pictures,
             seeds=seeds,
+            address=address,
         )
     except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
         report_stop(stop)  # the learned run resumes with fastrl run --resume; rerun assess to score

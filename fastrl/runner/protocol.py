@@ -130,10 +130,11 @@ def run_protocol(
     pictures: bool = True,
     keep_actions: bool = False,
     seeds: int = 1,
+    address: str | None = None,
 ) -> Protocol:
     """Rank, choose the best `top`, learn from them without actions on `seeds` training seeds (the spec's and the
-    next ones), score everything; return what was done. `keep_actions` (bench/learn_from_people.py's comparison)
-    learns from the recorded actions where there are."""
+    next ones; as Ray tasks at `address`, all at once where it has the CPUs), score everything; return what was
+    done. `keep_actions` (bench/learn_from_people.py's comparison) learns from the recorded actions where there are."""
     from .train.run import start_run
 
     console = console or Console(stderr=True)
@@ -170,9 +171,8 @@ def run_protocol(
     )
     console.print(why, markup=False, highlight=False)
     trained = [spec.train.seed + i for i in range(seeds)]
-    learned = [
-        start_run(
-            spec_path,
+    learning = [
+        (
             [
                 *EVALUATION,
                 *overrides,
@@ -181,12 +181,16 @@ def run_protocol(
                 "study.enabled=false",
                 *([f"train.seed={seed}"] if seeds > 1 else []),
             ],
-            console=console,
-            progress=progress,
-            into=run / ("learned" if seeds == 1 else f"learned-s{seed}"),
+            run / ("learned" if seeds == 1 else f"learned-s{seed}"),
         )
         for seed in trained
     ]
+    if address is not None:
+        from .seeds_on_ray import learn_on_ray
+
+        learned = learn_on_ray(address, spec_path, learning, console)
+    else:
+        learned = [start_run(spec_path, o, console=console, progress=progress, into=into) for o, into in learning]
     update_meta(run, status="scoring")
     scores = output or run / "scores.json"
     if seeds == 1:

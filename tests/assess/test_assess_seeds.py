@@ -84,13 +84,26 @@ def cohort(tmp_path_factory):
     return folder
 
 
-def test_assess_with_two_seeds_learns_two_scorers_and_reports_their_agreement(tmp_path, cohort):
-    out = tmp_path / "report" / "scores.json"
+def assess_two_seeds(cohort: Path, folder: Path, *more: str):
+    """`fastrl assess COHORT --seeds 2` into `folder` (runs and report); (CLI result, report path)."""
+    out = folder / "report" / "scores.json"
     res = CliRunner().invoke(
         app,
         ["assess", str(cohort), "--spec", str(NO_EXPERT), "--top", "2", "--seeds", "2", "-o", str(out)]
-        + ["--runs", str(tmp_path), "--no-progress"],
+        + ["--runs", str(folder), "--no-progress", *more],
     )
+    return res, out
+
+
+@pytest.fixture(scope="module")
+def two_seeds(tmp_path_factory, cohort):
+    """The cohort assessed with two seeds, one after another: (CLI result, report path, runs folder)."""
+    folder = tmp_path_factory.mktemp("two-seeds")
+    return (*assess_two_seeds(cohort, folder), folder)
+
+
+def test_assess_with_two_seeds_learns_two_scorers_and_reports_their_agreement(two_seeds, cohort):
+    res, out, tmp_path = two_seeds
     assert res.exit_code == 0, res.output
     assert "learned scores over seeds 0, 1: Kendall tau" in res.output
     run = next(tmp_path.glob("medial_pair/*-assess-airl-s0"))
@@ -106,3 +119,15 @@ def test_assess_with_two_seeds_learns_two_scorers_and_reports_their_agreement(tm
     assert out.with_name("scores_distributions.png").stat().st_size > 0
     bad = CliRunner().invoke(app, ["assess", str(cohort), "--spec", str(NO_EXPERT), "--seeds", "0"])
     assert bad.exit_code == 2 and "--seeds must be at least 1" in bad.output
+
+
+def test_seeds_learned_at_once_on_ray_score_as_one_after_another(tmp_path, cohort, two_seeds):
+    pytest.importorskip("ray")  # on loopback only: tests/conftest.py sets RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0
+    res, out = assess_two_seeds(cohort, tmp_path, "--address", "local")
+    assert res.exit_code == 0, res.output
+    assert "learning 2 seeds on Ray (local), 1 CPU each" in res.output
+    run = next(tmp_path.glob("medial_pair/*-assess-airl-s0"))
+    assert load_spec(run / "learned-s1" / "spec.yaml").train.workers == 1  # each on its one CPU
+    ray_rows, serial_rows = (json.loads(p.read_text())["trajectories"] for p in (out, two_seeds[1]))
+    for key in ("reward_raw", "value_raw", "reward_sd", "value_sd", "time"):  # same networks: the same scores
+        assert [r[key] for r in ray_rows] == pytest.approx([r[key] for r in serial_rows], rel=1e-9), key
