@@ -94,8 +94,9 @@ def taus(report: dict, labels: dict[str, int]) -> dict:
         sign = 1.0 if HIGHER_IS_BETTER[k] else -1.0
         labelled = [labels[subject[r["file"]]] for r in rows]
         out[k] = rank_correlations([sign * r[raw] for r in rows], labelled)["kendall_tau_b"]
-    for k in report.get("seeds", {}).get("agreement", {}):
-        out[k] = report["ranking"][k]["kendall_tau_b"]
+    for k in report.get("seeds", {}).get("agreement", {}):  # the seeds' mean of each one's standardised score
+        out[k] = rank_correlations([r[k + "_z"] for r in rows], [labels[subject[r["file"]]] for r in rows])
+        out[k] = out[k]["kendall_tau_b"]
     return out
 
 
