@@ -6,7 +6,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..data.inverse import to_control_rate
 from ..data.replay import replay
@@ -82,6 +81,8 @@ class Scorer:
         self.kin = Kinematics(self.env.task)
         self.anatomy = None
         if spec.scene.kind == "abdomen":
+            from scipy.spatial import cKDTree  # here: scipy.spatial costs 0.2 s of every other task's start-up
+
             self.anatomy = cKDTree(anatomy_vertices(spec.scene))
 
     def attach(self, networks) -> None:
