@@ -75,6 +75,9 @@ def assess_cohort(
         report_stop(stop)  # the learned run resumes with fastrl run --resume; rerun assess to score
     except (SpecError, FileNotFoundError, ValueError, CheckpointMismatch) as e:
         exit_with(e)
+    except KeyboardInterrupt:  # outside a learning run (ranking, scoring, seeds on Ray before any checkpoint)
+        err.print("interrupted: run the same command again", markup=False)
+        raise typer.Exit(code=130) from None
     report = done.assessment.report
     problems = list(report["problems"])
     problems += [p for p in done.skipped if not any(p.split(":")[0] in q for q in problems)]
