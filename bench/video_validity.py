@@ -86,17 +86,16 @@ def taus(report: dict, labels: dict[str, int]) -> dict:
 
     subject = {r["file"]: "-".join(r["file"].split("-")[:2]) for r in report["trajectories"]}  # L1-S01(-k)
     rows = [r for r in report["trajectories"] if subject[r["file"]] in labels]
+    labelled = [labels[subject[r["file"]]] for r in rows]
     out = {}
     for k in SCORES:
         raw = k + "_raw" if k in NORMALISED else k
         if not rows or rows[0].get(raw) is None:
             continue
         sign = 1.0 if HIGHER_IS_BETTER[k] else -1.0
-        labelled = [labels[subject[r["file"]]] for r in rows]
         out[k] = rank_correlations([sign * r[raw] for r in rows], labelled)["kendall_tau_b"]
-    for k in report.get("seeds", {}).get("agreement", {}):  # the seeds' mean of each one's standardised score
-        out[k] = rank_correlations([r[k + "_z"] for r in rows], [labels[subject[r["file"]]] for r in rows])
-        out[k] = out[k]["kendall_tau_b"]
+    for k in report.get("seeds", {}).get("agreement", {}):  # the mean of each seed's standardised score
+        out[k] = rank_correlations([r[k + "_z"] for r in rows], labelled)["kendall_tau_b"]
     return out
 
 
