@@ -104,17 +104,13 @@ class Scorer:
         """Replay one trajectory and score all but the learned scores; also its observations (for add_learned).
         A trajectory that stops before it succeeds and before the time limit is scored as if the trainee then held
         the scope still until the limit (quitting is not finishing fast)."""
-        tips = []
-        obs, infos, rewards = replay(self.env, traj, lambda u: tips.append(u.state.tip_pos))
-        held = held_to_limit(traj, self.spec, len(obs)) if not infos[-1]["success"] else None
-        added = 0.0
-        if held is not None:
-            added = (len(held.time) - len(obs)) / self.spec.episode.control_hz
-            traj, tips = held, []
-            obs, infos, rewards = replay(self.env, traj, lambda u: tips.append(u.state.tip_pos))
-        n = len(obs)
+        tips, given = [], len(traj.time)
+        held = held_to_limit(traj, self.spec, given)
+        obs, infos, rewards = replay(self.env, held or traj, lambda u: tips.append(u.state.tip_pos))
+        n, last = len(obs), infos[-1]
+        added = held_still(self.spec, given, n, last["success"])
+        traj = held if held is not None and added else traj
         time, tip = traj.time[:n] - traj.time[0], np.array(tips)
-        last = infos[-1]
         scores = {
             "heuristic": float(rewards.sum()),
             "subtasks": last["subtask"] / max(1, last["subtasks_total"]),
@@ -170,6 +166,15 @@ def held_to_limit(traj: Trajectory, spec: TaskSpec, replayed: int) -> Trajectory
 
     time = np.concatenate([traj.time[:n], traj.time[n - 1] + np.arange(1, extra + 1) / hz])
     return Trajectory(time, hold(traj.portal), traj.meta, instruments=hold(traj.instruments), bodies=hold(traj.bodies))
+
+
+def held_still(spec: TaskSpec, given: int, replayed: int, success: bool) -> float:
+    """Seconds a trajectory of `given` samples was held still to the time limit, once replayed held (one pass):
+    none where it succeeded within its own samples; from where the task stopped it where it stopped early."""
+    total = round(spec.episode.time_limit * spec.episode.control_hz) + 1
+    if success and replayed <= given:
+        return 0.0
+    return max(0, total - min(given, replayed)) / spec.episode.control_hz
 
 
 def learned_scores(networks, obs: np.ndarray) -> dict:

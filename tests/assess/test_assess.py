@@ -14,7 +14,7 @@ from fastrl.assess.kinematic import deviation_by_progress, log_dimensionless_jer
 from fastrl.assess.ranking import _boot_kendall, _scipy_stats, _spearman, _stats, rank_correlations
 from fastrl.assess.references import compute_expert_paths, expert_paths, reference_scores
 from fastrl.assess.report import build_report, score_files
-from fastrl.assess.scoring import Scorer, normalise
+from fastrl.assess.scoring import Scorer, held_to_limit, normalise
 from fastrl.cli import app
 from fastrl.data.replay import expert_trajectories, replay, rollout_trajectory
 from fastrl.data.trajectory import Trajectory
@@ -346,3 +346,6 @@ def test_a_trajectory_that_stops_early_is_scored_as_held_still_to_the_time_limit
     assert stopped.meta["held_still_s"] == pytest.approx(spec.episode.time_limit - cut.time[-1] + cut.time[0])
     assert stopped.scores["path_length"] == pytest.approx(path_length(stopped.tip[:n]))  # held: no more path
     assert stopped.scores["heuristic"] < whole.scores["heuristic"] and not stopped.meta["success"]
+    _, infos, _ = replay(scorer.env, cut)  # scored in one pass: the same as the cut replayed, then held and replayed
+    _, _, rewards = replay(scorer.env, held_to_limit(cut, spec, len(infos)))
+    assert not infos[-1]["success"] and stopped.scores["heuristic"] == pytest.approx(rewards.sum(), abs=1e-12)

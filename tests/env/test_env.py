@@ -326,3 +326,23 @@ def test_late_starts_run_the_clock_on_unseeded_resets_only():
         *_, terminated, truncated, _ = env.step(0)
         steps += 1
     assert truncated and steps == left
+
+
+def test_line_distance_grid_filled_tile_by_tile_is_the_whole_grid_at_once():
+    from scipy.spatial import cKDTree
+
+    from fastrl.env.sensing import DistanceGrid
+    from fastrl.spec.geometry import sample_polyline
+
+    line = np.array([[0.04, -0.04], [0.01, -0.01], [-0.01, 0.03], [-0.05, 0.04]])
+    grid = DistanceGrid(line, extent=0.05)
+    near = grid(0.01, -0.01)  # on the line: one tile filled, the rest still at the cap
+    assert near < 1e-3 and sum(map(sum, grid.ready)) == 1
+    points = np.random.default_rng(0).uniform(-0.06, 0.06, (3000, 2))
+    lazily = [grid(x, y) for x, y in points]
+    xs = grid.axis
+    gx, gy = np.meshgrid(xs, xs, indexing="ij")
+    tree = cKDTree(sample_polyline(line, 0.25 * grid.cell))
+    whole = np.minimum(tree.query(np.column_stack([gx.ravel(), gy.ravel()]))[0], grid.cap).reshape(gx.shape)
+    assert all(map(all, grid.ready)) and np.array_equal(np.array(grid.grid), whole)
+    assert lazily == [grid(x, y) for x, y in points] and max(lazily) == grid.cap  # outside the grid: the cap
