@@ -54,9 +54,11 @@ def _pair_counts(x: np.ndarray, y: np.ndarray, counts: np.ndarray) -> tuple[np.n
     sx, sy = np.sign(x[:, None] - x[None, :]).astype(np.int64), np.sign(y[:, None] - y[None, :]).astype(np.int64)
     n = counts.sum(axis=1)
 
+    weights = counts.astype(float)  # BLAS: every sum below is an integer under 2**53, so exact in float64
+
     def pairs(m: np.ndarray) -> np.ndarray:
         """Sum of m over all ordered pairs (i, j) of each sample, i == j included."""
-        return ((counts @ m) * counts).sum(axis=1)
+        return np.rint(((weights @ m) * weights).sum(axis=1)).astype(np.int64)
 
     con_minus_dis = pairs(sx * sy) // 2  # each unordered pair counted twice
     xtie, ytie = (pairs((sx == 0).astype(np.int64)) - n) // 2, (pairs((sy == 0).astype(np.int64)) - n) // 2
@@ -73,10 +75,10 @@ def _tau_b(con_minus_dis, xtie, ytie, tot: int):
 def _boot_kendall(x: np.ndarray, y: np.ndarray, draws: np.ndarray) -> np.ndarray:
     """Kendall tau-b of (x, y) resampled at each row of `draws` (as scipy's kendalltau, NaN for a constant
     resample), from exact integer pair counts."""
-    counts = np.zeros((len(draws), len(x)), np.int64)
-    np.add.at(counts, (np.arange(len(draws))[:, None], draws), 1)
-    n = draws.shape[1]
-    return _tau_b(*_pair_counts(x, y, counts), n * (n - 1) // 2)
+    rows, n = draws.shape[0], len(x)
+    counts = np.bincount((draws + n * np.arange(rows)[:, None]).ravel(), minlength=rows * n).reshape(rows, n)
+    k = draws.shape[1]
+    return _tau_b(*_pair_counts(x, y, counts), k * (k - 1) // 2)
 
 
 def _tie_sums(v: np.ndarray) -> tuple[int, int, int]:
@@ -140,7 +142,7 @@ def _bootstrap(scores: np.ndarray, labels: np.ndarray, n_boot: int, rng) -> np.n
     rows = max(1, min(n_boot, BOOT_ELEMENTS // max(1, n)))
     out = [np.empty((0, 2))]
     for start in range(0, n_boot, rows):
-        i = np.array([rng.integers(0, n, n) for _ in range(min(rows, n_boot - start))])
+        i = rng.integers(0, n, (min(rows, n_boot - start), n))  # the same draws as one resample at a time
         if n <= BOOT_PAIR_LIMIT:
             tau = _boot_kendall(scores, labels, i)
         else:
