@@ -51,6 +51,7 @@ def score(
     ] = False,
 ) -> None:
     """Score trajectories by replay: heuristic and learned reward, learned value, length, time, smoothness."""
+    from ..long_lived import long_lived
     from ..runner.score.assessment import assess
     from ..spec import SpecError
 
@@ -63,18 +64,19 @@ def score(
 
         check_run(run, {"spec.yaml"})
     try:
-        result = assess(
-            inputs,
-            run=run,
-            spec_path=spec,
-            output=output,
-            reference_episodes=references,
-            pictures=pictures,
-            console=err,
-            progress=progress,
-            address=address,
-            fresh=fresh,
-        )
+        with long_lived():  # the libraries imported so far: no full collection scans them again
+            result = assess(
+                inputs,
+                run=run,
+                spec_path=spec,
+                output=output,
+                reference_episodes=references,
+                pictures=pictures,
+                console=err,
+                progress=progress,
+                address=address,
+                fresh=fresh,
+            )
     except (SpecError, FileNotFoundError, ValueError) as e:
         exit_with(e)
     except KeyboardInterrupt:
