@@ -169,8 +169,9 @@ def held_to_limit(traj: Trajectory, spec: TaskSpec, replayed: int) -> Trajectory
 
 
 def held_still(spec: TaskSpec, given: int, replayed: int, success: bool) -> float:
-    """Seconds a trajectory of `given` samples was held still to the time limit, once replayed held (one pass):
-    none where it succeeded within its own samples; from where the task stopped it where it stopped early."""
+    """Seconds of stillness added to a trajectory of `given` samples whose held copy replayed `replayed` samples:
+    none if it succeeded within its own samples, else the rest of the time limit after its own samples (after the
+    replayed ones where the task stopped it earlier)."""
     total = round(spec.episode.time_limit * spec.episode.control_hz) + 1
     if success and replayed <= given:
         return 0.0
