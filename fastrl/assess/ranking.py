@@ -75,9 +75,8 @@ def _tau_b(con_minus_dis, xtie, ytie, tot: int):
 def _boot_kendall(x: np.ndarray, y: np.ndarray, draws: np.ndarray) -> np.ndarray:
     """Kendall tau-b of (x, y) resampled at each row of `draws` (as scipy's kendalltau, NaN for a constant
     resample), from exact integer pair counts."""
-    rows, n = draws.shape[0], len(x)
+    (rows, k), n = draws.shape, len(x)
     counts = np.bincount((draws + n * np.arange(rows)[:, None]).ravel(), minlength=rows * n).reshape(rows, n)
-    k = draws.shape[1]
     return _tau_b(*_pair_counts(x, y, counts), k * (k - 1) // 2)
 
 

@@ -105,11 +105,10 @@ class Scorer:
         A trajectory that stops before it succeeds and before the time limit is scored as if the trainee then held
         the scope still until the limit (quitting is not finishing fast)."""
         tips, given = [], len(traj.time)
-        held = held_to_limit(traj, self.spec, given)
-        obs, infos, rewards = replay(self.env, held or traj, lambda u: tips.append(u.state.tip_pos))
+        traj = held_to_limit(traj, self.spec, given) or traj  # its first `given` samples are the trajectory's own
+        obs, infos, rewards = replay(self.env, traj, lambda u: tips.append(u.state.tip_pos))
         n, last = len(obs), infos[-1]
         added = held_still(self.spec, given, n, last["success"])
-        traj = held if held is not None and added else traj
         time, tip = traj.time[:n] - traj.time[0], np.array(tips)
         scores = {
             "heuristic": float(rewards.sum()),
@@ -154,8 +153,7 @@ class Scorer:
 def held_to_limit(traj: Trajectory, spec: TaskSpec, replayed: int) -> Trajectory | None:
     """The trajectory's first `replayed` samples, then its last pose held on the control grid up to the time limit
     (None where it already reaches the limit)."""
-    hz = spec.episode.control_hz
-    total = round(spec.episode.time_limit * hz) + 1  # samples of a whole episode, the reset one included
+    hz, total = spec.episode.control_hz, episode_samples(spec)
     if replayed >= total:
         return None
     n, extra = replayed, total - replayed
@@ -168,14 +166,18 @@ def held_to_limit(traj: Trajectory, spec: TaskSpec, replayed: int) -> Trajectory
     return Trajectory(time, hold(traj.portal), traj.meta, instruments=hold(traj.instruments), bodies=hold(traj.bodies))
 
 
+def episode_samples(spec: TaskSpec) -> int:
+    """Samples of a whole episode on the control grid, the reset one included."""
+    return round(spec.episode.time_limit * spec.episode.control_hz) + 1
+
+
 def held_still(spec: TaskSpec, given: int, replayed: int, success: bool) -> float:
     """Seconds of stillness added to a trajectory of `given` samples whose held copy replayed `replayed` samples:
     none if it succeeded within its own samples, else the rest of the time limit after its own samples (after the
     replayed ones where the task stopped it earlier)."""
-    total = round(spec.episode.time_limit * spec.episode.control_hz) + 1
     if success and replayed <= given:
         return 0.0
-    return max(0, total - min(given, replayed)) / spec.episode.control_hz
+    return max(0, episode_samples(spec) - min(given, replayed)) / spec.episode.control_hz
 
 
 def learned_scores(networks, obs: np.ndarray) -> dict:

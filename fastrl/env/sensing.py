@@ -164,8 +164,9 @@ class DistanceGrid:
         if not (0.0 <= u < self.n - 1 and 0.0 <= v < self.n - 1):
             return self.cap
         i, j = int(u), int(v)
-        if not self.ready[i // self.TILE][j // self.TILE]:
-            self._fill(i // self.TILE, j // self.TILE)
+        ti, tj = i // self.TILE, j // self.TILE
+        if not self.ready[ti][tj]:
+            self._fill(ti, tj)
         a, b = u - i, v - j
         g0, g1 = self.grid[i], self.grid[i + 1]
         return (1 - a) * ((1 - b) * g0[j] + b * g0[j + 1]) + a * ((1 - b) * g1[j] + b * g1[j + 1])
