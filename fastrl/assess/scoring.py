@@ -48,7 +48,6 @@ class TrajectoryScores:
     values: np.ndarray | None = None  # (n,) learned value of each state
     rewards: np.ndarray | None = None  # (n,) learned reward of each state
     normalised: dict[str, float] = field(default_factory=dict)
-    path: Path | None = None  # the file it was read from, where one was
 
     @property
     def subject(self) -> str:

@@ -11,7 +11,7 @@ from .discriminator import augment
 from .fitting import DiscriminatorFit, Transitions, make_batch
 from .generator import current_original_obs, normalize_obs, original_obs, transitions_batch
 from .history import PolicyHistory
-from .ranking import CohortRanking, RankedRollouts
+from .ranking import RankedRollouts
 from .scaling import ReturnScale
 
 
@@ -22,7 +22,7 @@ class AdversarialCallback(BaseCallback):
     that many earlier ones (raw observations, normalised and scored under the current policy when drawn).
     With `scale_reward` (the spec's default: AIRL yes, GAIL no), the generator's learned reward is divided by the
     running spread of its discounted return. With `ranked` rollouts, each discriminator step adds `ranking_weight`
-    times their ranking loss on shaped AIRL's r_psi, and as much of the `cohort`'s (demonstrations above the rest)."""
+    times their ranking loss on shaped AIRL's r_psi."""
 
     def __init__(
         self,
@@ -35,7 +35,6 @@ class AdversarialCallback(BaseCallback):
         scale_reward: bool = False,
         ranked: RankedRollouts | None = None,
         ranking_weight: float = 0.0,
-        cohort: CohortRanking | None = None,
     ):
         super().__init__()
         self.fit, self.disc, self.expert, self.n_epochs = fit, fit.disc, expert, epochs
@@ -43,9 +42,9 @@ class AdversarialCallback(BaseCallback):
         self.scale_reward = scale_reward
         self.scale: ReturnScale | None = None
         self.stats: dict[str, float] = {}
-        self.ranked, self.ranking_weight, self.cohort = ranked, ranking_weight, cohort
+        self.ranked, self.ranking_weight = ranked, ranking_weight
         self.ranking_rng = np.random.default_rng(seed + 1)
-        self._frozen_states: tuple | None = None
+        self._frozen_states: torch.Tensor | None = None
 
     def _on_rollout_start(self) -> None:
         self.next_obs, self.terminal, self.env_rewards, self.dones = [], [], [], []
@@ -88,25 +87,16 @@ class AdversarialCallback(BaseCallback):
         self.history.add(raw)
         return policy
 
-    def _ranked_states(self) -> tuple:
-        """The ranking rollouts' and the cohort's states as the discriminator sees them now: once for all while the
-        observation normalisation is frozen (a cloned generator keeps the clone's), else again after each rollout."""
+    def _ranked_states(self):
+        """The ranking rollouts' states as the discriminator sees them now: once for all while the observation
+        normalisation is frozen (a cloned generator keeps the clone's), else again after each rollout."""
         env = self.model.get_env()
         frozen = not isinstance(env, VecNormalize) or not env.training
         if frozen and self._frozen_states is not None:
             return self._frozen_states
-        normalize = lambda o: normalize_obs(self.model, o)  # noqa: E731
-        states = tuple(None if r is None else r.states(normalize) for r in (self.ranked, self.cohort))
+        states = self.ranked.states(lambda o: normalize_obs(self.model, o))
         self._frozen_states = states if frozen else None
         return states
-
-    def _ranking_loss(self, states: tuple) -> torch.Tensor:
-        """The weighted ranking losses of one discriminator step."""
-        loss = torch.zeros(())
-        for ranking, s in zip((self.ranked, self.cohort), states):
-            if ranking is not None:
-                loss = loss + ranking.loss(self.disc, s, self.ranking_rng)
-        return self.ranking_weight * loss
 
     def _on_rollout_end(self) -> None:
         buf = self.model.rollout_buffer
@@ -116,9 +106,9 @@ class AdversarialCallback(BaseCallback):
         rollout = make_batch(obs, nxt, term, log_pi, self.disc.absorbing)
         policy = rollout if self.history is None else self._with_history(rollout, term)
         expert = transitions_batch(self.model, self.expert, self.disc)
-        if self.ranked is not None or self.cohort is not None:
+        if self.ranked is not None:
             states = self._ranked_states()
-            self.fit.ranking = lambda: self._ranking_loss(states)
+            self.fit.ranking = lambda: self.ranking_weight * self.ranked.loss(self.disc, states, self.ranking_rng)
         self.stats.update(self.fit.epochs(policy, expert, self.n_epochs))
         self.stats.update(self.fit.reward_stats(rollout, expert))
         with torch.no_grad():

@@ -155,36 +155,3 @@ class RankedRollouts:
         t = np.minimum(start[:, None] + np.arange(self.snippet), steps - 1)
         margin = disc.reward(states[better[:, None], t]).sum(-1) - disc.reward(states[worse[:, None], t]).sum(-1)
         return torch.nn.functional.softplus(-margin).mean()
-
-
-class CohortRanking:
-    """The cohort's own order: a snippet of a demonstration (one of the best K recordings) must sum higher under
-    r_psi than a snippet of one of the cohort's other recordings, each snippet drawn anywhere in its own recording
-    (the rest as unlabelled data, as in SSRR: only the rule that chose the best K ranks them)."""
-
-    def __init__(self, env, demos: list[Trajectory], others: list[Trajectory], *, snippet: int = 50):
-        runs = [replay(env, t)[0].astype(np.float32) for t in [*demos, *others]]
-        self.better = np.arange(len(runs)) < len(demos)
-        self.length = np.array([len(obs) for obs in runs])
-        self.snippet = int(min(snippet, self.length.min()))
-        horizon = int(self.length.max())
-        self.raw = np.stack([np.concatenate([obs, np.repeat(obs[-1:], horizon - len(obs), 0)]) for obs in runs])
-
-    def states(self, normalize: Callable[[np.ndarray], np.ndarray]) -> torch.Tensor:
-        """Augmented states (recordings, steps, d + 1), normalised as the discriminator sees them now."""
-        n, h, d = self.raw.shape
-        return augment(torch.as_tensor(normalize(self.raw.reshape(n * h, d)), dtype=torch.float32)).reshape(n, h, d + 1)
-
-    def loss(
-        self, disc: Discriminator, states: torch.Tensor, rng: np.random.Generator, pairs: int = 32
-    ) -> torch.Tensor:
-        """Mean -log P(the demonstration's snippet scores higher) over random (demonstration, other) pairs, each
-        snippet's mean reward (a sum's margin grows with its length and stops teaching at the first separation)."""
-        better = rng.choice(np.flatnonzero(self.better), pairs)
-        worse = rng.choice(np.flatnonzero(~self.better), pairs)
-
-        def snippets(rows: np.ndarray) -> torch.Tensor:
-            start = rng.integers(0, self.length[rows] - self.snippet + 1)
-            return disc.reward(states[rows[:, None], start[:, None] + np.arange(self.snippet)]).mean(-1)
-
-        return torch.nn.functional.softplus(snippets(worse) - snippets(better)).mean()

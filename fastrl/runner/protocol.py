@@ -32,7 +32,6 @@ DEFAULT_BY = "time"
 ALGORITHMS = ("airl", "gail")
 # the learned policy's final evaluation: no scripted expert beside it (nothing on this path consults one) and
 # endoscope images for 2 of its episodes, not 20 (they took 12 s and 9 s of TraceLines' 2 min); --set overrides
-OTHERS_PER_BEST = 4  # the rest ranked below the best K: at most 4K of them (all 40 of a 5 x 10 cohort's rest)
 EVALUATION = ("evaluate.expert=false", "evaluate.record_episodes=2")
 
 
@@ -78,7 +77,6 @@ def rank_recordings(
                 raise TrajectoryError(problem)
             traj = to_control_rate(traj, hz)
             scored = scorer.score(traj, path.stem)
-            scored.path = path
         except (TrajectoryError, ValueError) as e:
             skipped.append(f"{path}: {e}")
             continue
@@ -116,14 +114,6 @@ def write_best(
             Trajectory(traj.time, traj.portal, meta, instruments=traj.instruments, bodies=traj.bodies).save(path)
         )
     return paths
-
-
-def write_others(rest: list[TrajectoryScores], folder: Path, hz: float, most: int) -> None:
-    """At most `most` of the recordings not learned from (spread evenly over their order), without actions, on the
-    control grid, for the ranking of the demonstrations above them (irl.discriminator.ranking_others)."""
-    keep = np.unique(np.linspace(0, len(rest) - 1, min(len(rest), most)).round().astype(int)) if rest else []
-    again = [(s, to_control_rate(Trajectory.load(s.path), hz)) for s in (rest[i] for i in keep)]
-    write_best(again, folder)
 
 
 def run_protocol(
@@ -173,9 +163,6 @@ def run_protocol(
     run = run or new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
     write_meta(run, spec, str(spec_path), {"status": "learning", "overrides": list(overrides), "kind": "assess"})
     write_best(chosen, run / "best", keep_actions)
-    if spec.irl.discriminator.ranking_others:
-        write_others([s for s, _ in ranked[top:]], run / "others", spec.episode.control_hz, OTHERS_PER_BEST * top)
-        overrides = [*overrides, f"irl.demonstrations.others={run / 'others'}"]
     rows = [{"file": s.name, "subject": s.subject, "skill": s.skill, **_criterion(s)} for s, _ in chosen]
     why = (
         f"learned from the {len(chosen)} best of {len(ranked)} recordings by {BY[by]}"

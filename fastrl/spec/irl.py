@@ -19,11 +19,6 @@ class Demonstrations(Strict):
     path: str | None = Field(None, description="directory of trajectory files (.npz); else the scripted expert")
     expert: int = Field(20, ge=1, description="how many scripted-expert demonstrations to write into the run")
     seed: int = Field(0, ge=0, description="seed of the first scripted-expert demonstration")
-    others: str | None = Field(
-        None,
-        description="directory of the cohort's other recordings, the ones not learned from (`fastrl assess` "
-        "writes it where `discriminator.ranking_others` asks)",
-    )
 
 
 class DiscriminatorSettings(Strict):
@@ -86,11 +81,6 @@ class DiscriminatorSettings(Strict):
         False,
         description="also rank copies of the demonstrations degraded at each `ranking_noise` rate by these "
         "kinematic overlays (fastrl.data.overlays), pairs of the same source only; true: drift, jitter, slowed",
-    )
-    ranking_others: bool = Field(
-        False,
-        description="shaped AIRL on PPO with `fastrl assess`: r_psi also sums higher over a snippet of a "
-        "demonstration than over a snippet of one of the cohort's other recordings (the rest, unlabelled)",
     )
     average_every: int = Field(
         50000,

@@ -10,14 +10,13 @@ import torch
 import fastrl
 from fastrl.agents.expert import ScriptedExpert
 from fastrl.agents.sb3 import build_model, make_vec_env
-from fastrl.data.overlays import OVERLAYS, overlaid
+from fastrl.data.overlays import OVERLAYS
 from fastrl.data.replay import expert_trajectories
-from fastrl.data.trajectory import Trajectory
 from fastrl.irl import AdversarialCallback, Discriminator, DiscriminatorForm
 from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.discriminator import absorbing_states, augment
 from fastrl.irl.fitting import DiscriminatorFit, input_gradient_norm, make_batch
-from fastrl.irl.ranking import CohortRanking, RankedRollouts, noisy_expert_rollout, noisy_rollouts_batched
+from fastrl.irl.ranking import RankedRollouts, noisy_expert_rollout, noisy_rollouts_batched
 from fastrl.runner.train.cloned import ClonedActor
 from fastrl.spec import SpecError, load_spec
 from fastrl.spec.columns import discriminator_inputs, reward_inputs
@@ -306,38 +305,6 @@ def test_the_ranking_loss_teaches_r_psi_that_less_noise_is_better():
         assert float(ranked.loss(disc, states, rng)) < first
     means = [totals[ranked.noise == eps].mean() for eps in (0.0, 0.5, 1.0)]
     assert means[0] > means[1] > means[2], means
-
-
-def test_the_cohort_ranking_teaches_r_psi_that_the_demonstrations_beat_the_rest():
-    spec = load_spec(spec_file("tracelines"), ["episode.time_limit=8"])
-    env = fastrl.make(spec)
-    demos = expert_trajectories(env, [1, 2, 3])
-    hz, ranges = spec.episode.control_hz, env.unwrapped.task.ranges
-
-    def shaky(t: Trajectory, seed: int) -> Trajectory:
-        """A copy of t with tremor and drift, played slower: a weaker trainee on the same path."""
-        portal = overlaid(t.portal, {"jitter": 0.8, "drift": 0.8, "slowed": 0.5}, seed, hz, ranges)
-        return Trajectory(np.arange(len(portal)) / hz, portal, t.meta)
-
-    others = [shaky(t, k) for k, t in enumerate(demos)]
-    cohort = CohortRanking(env, demos, others, snippet=20)
-    assert cohort.better.tolist() == [True] * 3 + [False] * 3
-    assert (cohort.length[3:] > cohort.length[:3]).all()  # slowed: the rest run longer, padded to one horizon
-    torch.manual_seed(0)
-    disc = Discriminator(cohort.raw.shape[2], DiscriminatorForm(kind="airl", gamma=0.99, hidden=(32, 32)))
-    states, rng = cohort.states(lambda o: o), np.random.default_rng(0)
-    optim = torch.optim.Adam(disc.parameters(), lr=1e-3)
-    with torch.no_grad():
-        first = float(cohort.loss(disc, states, rng))
-    for _ in range(200):
-        loss = cohort.loss(disc, states, rng)
-        optim.zero_grad()
-        loss.backward()
-        optim.step()
-    with torch.no_grad():
-        assert float(cohort.loss(disc, states, rng)) < 0.5 * first
-        per_step = [float(disc.reward(states[i, :n]).mean()) for i, n in enumerate(cohort.length)]
-    assert min(per_step[:3]) > max(per_step[3:]), per_step  # every demonstrated state above every shaky one
 
 
 def test_a_held_random_action_is_repeated_for_its_steps():

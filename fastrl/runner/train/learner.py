@@ -30,7 +30,7 @@ from ...irl import (
 from ...irl.averaging import RewardAveraging
 from ...irl.demonstrations import expert_transitions
 from ...irl.fitting import DiscriminatorFit, Transitions
-from ...irl.ranking import CohortRanking, RankedRollouts
+from ...irl.ranking import RankedRollouts
 from ...model.scope import joint_ranges
 from ...spec.columns import discriminator_inputs, reward_inputs
 from ...spec.models import TaskSpec
@@ -126,20 +126,6 @@ def demonstrations(spec: TaskSpec, run: Path, console: Console, progress: bool) 
     return prepared.trajectories
 
 
-def cohort_ranking(spec: TaskSpec, env, demos: list[Trajectory], console: Console) -> CohortRanking | None:
-    """The demonstrations ranked above the cohort's other recordings (`irl.demonstrations.others`), or None
-    where there are none."""
-    folder = spec.irl.demonstrations.others
-    named, errors = load_recordings([folder], joint_ranges(spec.scope)) if folder else ([], [])
-    for message in errors:
-        console.print(f"[yellow]skipped[/yellow] {escape(message)}", highlight=False)
-    if not named:
-        console.print("[dim]irl.discriminator.ranking_others: no other recordings to rank below the demonstrations[/]")
-        return None
-    console.print(f"r_psi ranks the demonstrations above {len(named)} other recordings of the cohort", highlight=False)
-    return CohortRanking(env, demos, [t for _, t in named])
-
-
 def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
     """Print the PPO generator's (or BC's) envs and hyperparameters and where they come from; keep them in meta.json."""
     train = spec.learning()
@@ -224,7 +210,6 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
         console.print(
             "[dim]irl.discriminator.ranking: the ranking prior is for shaped AIRL on PPO; this run goes without it[/]"
         )
-    cohort = cohort_ranking(spec, env, demos, console) if ranked is not None and d.ranking_others else None
     fit = DiscriminatorFit(disc, lr=d.learning_rate, seed=spec.train.seed, gradient_penalty=d.gradient_penalty)
     if off_policy:
         cb = OffPolicyAdversarialCallback(
@@ -240,7 +225,6 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
             scale_reward=d.scale_reward,
             ranked=ranked,
             ranking_weight=d.ranking,
-            cohort=cohort,
         )
     averaging = RewardAveraging(disc, d.average_every) if d.average_every and disc.shaped else None
     learner = Learner(spec, venv, model, [cb, *([averaging] if averaging else [])], disc, demos, averaging, console)
