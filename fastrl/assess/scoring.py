@@ -173,10 +173,10 @@ def episode_samples(spec: TaskSpec) -> int:
 
 def held_still(spec: TaskSpec, given: int, replayed: int, success: bool) -> float:
     """Seconds of stillness added to a trajectory of `given` samples whose held copy replayed `replayed` samples:
-    none if it succeeded within its own samples, else the rest of the time limit after its own samples (after the
-    replayed ones where the task stopped it earlier)."""
-    if success and replayed <= given:
-        return 0.0
+    those it held before it succeeded, else the rest of the time limit after its own samples (after the replayed
+    ones where the task stopped it earlier)."""
+    if success:
+        return max(0, replayed - given) / spec.episode.control_hz
     return max(0, episode_samples(spec) - min(given, replayed)) / spec.episode.control_hz
 
 

@@ -334,6 +334,16 @@ def test_fastrl_score_needs_a_run_or_a_spec(tmp_path):
     assert res.exit_code == 2 and "no trajectory could be scored" in res.output
 
 
+def test_a_trajectory_that_succeeds_while_held_still_is_said_to_be_held_only_that_long():
+    spec = _spec()
+    scorer = Scorer(spec)
+    full = expert_trajectories(scorer.env, [0])[0]
+    cut = Trajectory(full.time[:-1], full.portal[:-1], full.meta)  # one sample short of the final dwell
+    scored = scorer.score(cut)
+    assert scored.meta["success"] and scored.scores["time"] == pytest.approx(full.time[-1] - full.time[0])
+    assert scored.meta["held_still_s"] == pytest.approx(1 / spec.episode.control_hz)
+
+
 def test_a_trajectory_that_stops_early_is_scored_as_held_still_to_the_time_limit():
     spec = _spec()
     scorer = Scorer(spec)
