@@ -1,0 +1,152 @@
+"""How far can a trainee family's skill labels be read at all? Kinematic summaries, each alone and all together.
+
+    python bench/family_ceiling.py --tasks tracelines imagecentring periscoping
+    python bench/family_ceiling.py --tasks tracelines --root runs/bench-validity --json docs/family_ceiling.json
+
+For each task and family, the 5 x 10 cohort of bench/validity.py (written there if missing, seed 0, without actions)
+is replayed as `fastrl assess` replays it, and each trajectory is summarised by what a rater or a tracker could
+measure: duration, camera path length, subtasks done, mean linear and angular speed of the camera, mean distance
+error, mean off-centre of the target in the image, horizon error, contacts and jerk. Printed per family, Kendall tau-b
+against the labels of:
+- each summary alone, signed so that higher ranks better; the best of them is chosen with the labels, so it is an
+  optimistic ceiling for any single metric;
+- a supervised scorer: a ridge regression of the label on all the summaries (standardised), its predictions 5-fold
+  cross-validated (folds by subject, every level in each). It sees labels, which `fastrl assess` never does.
+A family on which even the supervised scorer stays under 0.8 cannot meet issue 43's bar (learned reward and value
+>= 0.8) through what these summaries hold: its labels say less about the trajectories than the bar asks of a score.
+A score without ties reaches at most 0.90 on a 5 x 10 cohort (the labels tie within a level).
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+from common import machine_line
+from validity import ROOT, cohort
+
+FOLDS = 5
+RIDGE = 1.0  # on standardised summaries: the fit is not sensitive to it between 0.1 and 10
+
+
+def summaries(scored, obs: np.ndarray, own: int, columns: dict[str, list[int]]) -> dict[str, float]:
+    """What a rater or a tracker could measure of one replayed trajectory, each signed so that higher is better."""
+    own_obs = obs[:own]
+
+    def mean_norm(term: str, first: int | None = None) -> float:
+        cols = columns[term][:first] if first else columns[term]
+        return float(np.linalg.norm(own_obs[:, cols], axis=1).mean())
+
+    s = scored.scores
+    return {
+        "time": -s["time"],
+        "path_length": -s["path_length"],
+        "subtasks": s["subtasks"],
+        "speed": mean_norm("tip_vel"),
+        "turn_rate": mean_norm("tip_quat_rate"),
+        "distance_error": -mean_norm("distance_error"),
+        "off_centre": -mean_norm("target_in_camera", 2),
+        "horizon_error": -mean_norm("horizon_error"),
+        "contacts": -float(own_obs[:, columns["contact"]].sum()),
+        "jerk": s["smoothness"],
+    }
+
+
+def observation_columns(spec) -> dict[str, list[int]]:
+    """Each observation term's columns."""
+    from fastrl.terms import OBSERVATION_TERMS
+
+    coords = [i.coordinates for i in spec.instruments]
+    names = [n for n in spec.observation.terms() for _ in range(OBSERVATION_TERMS[n].width(coords))]
+    return {n: [i for i, m in enumerate(names) if m == n] for n in dict.fromkeys(names)}
+
+
+def tau(x, labels) -> float | None:
+    """Kendall tau-b of x against the labels (None where x is constant)."""
+    from scipy.stats import kendalltau
+
+    x = np.asarray(x, float)
+    return None if np.ptp(x) == 0 else float(kendalltau(x, labels, variant="b").statistic)
+
+
+def supervised(features: np.ndarray, labels: np.ndarray) -> float:
+    """Tau-b of a ridge regression of the labels on the standardised features, predicted fold by fold."""
+    spread = features.std(0)
+    x = (features - features.mean(0)) / np.where(spread > 0, spread, 1.0)
+    x = np.column_stack([x, np.ones(len(x))])
+    folds = np.arange(len(labels)) % FOLDS  # files in subject order: every level in every fold
+    predicted = np.empty(len(labels))
+    for k in range(FOLDS):
+        fit = folds != k
+        w = np.linalg.solve(x[fit].T @ x[fit] + RIDGE * np.eye(x.shape[1]), x[fit].T @ labels[fit])
+        predicted[~fit] = x[~fit] @ w
+    return tau(predicted, labels)
+
+
+def family_row(task: str, family: str, root: Path) -> dict:
+    """Every summary's tau-b, the best single one, and the supervised scorer's, for one family's cohort."""
+    from fastrl.assess.scoring import Scorer
+    from fastrl.spec import load_spec
+
+    spec = load_spec(f"specs/{task}.yaml")
+    scorer, columns = Scorer(spec), observation_columns(spec)
+    rows, labels = [], []
+    for f in sorted(cohort(task, family, root).glob("*.npz")):
+        traj = scorer.load_file(f)
+        scored, obs = scorer.replayed(traj, f.stem)
+        rows.append(summaries(scored, obs, min(len(traj.time), len(obs)), columns))
+        labels.append(scored.skill)
+    labels = np.asarray(labels, float)
+    taus = {k: tau([r[k] for r in rows], labels) for k in rows[0]}
+    usable = {k: t for k, t in taus.items() if t is not None}
+    best = max(usable, key=lambda k: abs(usable[k]))
+    features = np.array([[r[k] for k in usable] for r in rows])
+    return {
+        "task": task,
+        "family": family,
+        "tau_b": taus,
+        "best_single": best,
+        "best_single_tau_b": abs(usable[best]),
+        "supervised_tau_b": supervised(features, labels),
+    }
+
+
+def main() -> None:
+    from fastrl.data.families import FAMILIES, WITH_INSTRUMENTS
+
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--tasks", nargs="+", default=["tracelines"])
+    parser.add_argument("--families", nargs="+", default=[*FAMILIES, "mixed"])
+    parser.add_argument("--root", type=Path, default=ROOT)
+    parser.add_argument("--json", type=Path, help="write the rows here (docs/family_ceiling.json)")
+    args = parser.parse_args()
+    print(f"# {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC, {machine_line()}", flush=True)
+    print("| task | family | time | path length | best single summary | supervised (5-fold) |")
+    print("|---|---|---|---|---|---|")
+    rows = []
+    for task in args.tasks:
+        two_hands = task == "triangulation"
+        for family in args.families:
+            if two_hands and family not in WITH_INSTRUMENTS:
+                continue
+            r = family_row(task, family, args.root)
+            rows.append(r)
+            t = r["tau_b"]
+            print(
+                f"| {task} | {family} | {t['time']:.2f} | {t['path_length'] or 0:.2f} | "
+                f"{r['best_single']} {r['best_single_tau_b']:.2f} | {r['supervised_tau_b']:.2f} |",
+                flush=True,
+            )
+    if args.json:
+        args.json.write_text(json.dumps({"machine": machine_line(), "rows": rows}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
