@@ -33,7 +33,7 @@ from common import machine_line
 from validity import ROOT, cohort
 
 FOLDS = 5
-RIDGE = 1.0  # on standardised summaries: the fit is not sensitive to it between 0.1 and 10
+RIDGE = 1.0  # on standardised summaries; 0.1 or 10 move the fits of seven TraceLines families by 0.04 at most
 
 
 def summaries(scored, obs: np.ndarray, own: int, columns: dict[str, list[int]]) -> dict[str, float]:
