@@ -21,6 +21,7 @@ from fastrl.atomic import DiskFull, atomic_write, write_json
 from fastrl.cli import app
 from fastrl.log.recording import recording_problem
 from fastrl.runner.runs.rundir import latest_checkpoint
+from fastrl.runner.runs.stops import deferred, stop_on_sigterm
 
 from ..conftest import spec_file
 
@@ -394,3 +395,16 @@ def test_a_full_disk_stops_in_a_sentence_and_the_run_resumes_once_space_is_freed
     filler.unlink()
     resume(run)
     verify(*(run / f"recording{part}.rrd" for part in ("", ".part1", ".part2")))
+
+
+def test_a_stop_during_a_deferred_block_is_raised_when_the_block_is_done():
+    done = []
+    with pytest.raises(KeyboardInterrupt):
+        with stop_on_sigterm():
+            with deferred():  # as a periodic checkpoint is written
+                signal.raise_signal(signal.SIGINT)
+                time.sleep(0.01)  # a Python handler would have raised here
+                done.append("the block went on")
+            done.append("not reached")
+    assert done == ["the block went on"]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # the handlers of before are back

@@ -18,7 +18,7 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 from ...agents.sb3 import save_checkpoint
 from ...atomic import append_line
-from ..runs.stops import check_space, tree_bytes
+from ..runs.stops import check_space, deferred, tree_bytes
 
 
 class SessionRate(BaseCallback):
@@ -239,9 +239,10 @@ class Checkpoints(BaseCallback):
         check_space(target, tree_bytes(newest[-1]) if newest else 0)
         if self.before_save is not None:  # e.g. the recording flushed: it holds all logged up to the checkpoint
             self.before_save()
-        path = save_checkpoint(target, self.model, self.training_env, {"episodes": self.tally.episodes}, self.parts)
-        for p in sorted((self.run / "checkpoints").glob("[0-9]*"))[: -self.keep]:
-            shutil.rmtree(p, ignore_errors=True)
+        with deferred():  # a Ctrl-C mid-write (torch.save turns it into a RuntimeError) stops after the save
+            path = save_checkpoint(target, self.model, self.training_env, {"episodes": self.tally.episodes}, self.parts)
+            for p in sorted((self.run / "checkpoints").glob("[0-9]*"))[: -self.keep]:
+                shutil.rmtree(p, ignore_errors=True)
         return path
 
 
