@@ -61,10 +61,9 @@ def summaries(scored, obs: np.ndarray, own: int, columns: dict[str, list[int]]) 
 
 def observation_columns(spec) -> dict[str, list[int]]:
     """Each observation term's columns."""
-    from fastrl.terms import OBSERVATION_TERMS
+    from fastrl.spec.columns import column_terms
 
-    coords = [i.coordinates for i in spec.instruments]
-    names = [n for n in spec.observation.terms() for _ in range(OBSERVATION_TERMS[n].width(coords))]
+    names = column_terms(spec)
     return {n: [i for i, m in enumerate(names) if m == n] for n in dict.fromkeys(names)}
 
 

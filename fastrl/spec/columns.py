@@ -6,12 +6,17 @@ from ..terms import OBSERVATION_TERMS
 from .irl import ppo_generator
 
 
+def column_terms(spec) -> list[str]:
+    """The observation term of each column of one frame."""
+    coords = [i.coordinates for i in spec.instruments]
+    return [n for n in spec.observation.terms() for _ in range(OBSERVATION_TERMS[n].width(coords))]
+
+
 def columns_without(spec, terms: list[str]) -> list[int] | None:
     """Observation columns of every term but these (every frame of a stack); None: all of them."""
-    coords = [i.coordinates for i in spec.instruments]
-    column_terms = [n for n in spec.observation.terms() for _ in range(OBSERVATION_TERMS[n].width(coords))]
-    keep = [i for i, n in enumerate(column_terms * spec.observation.stack) if n not in terms]
-    return None if len(keep) == len(column_terms) * spec.observation.stack else keep
+    names = column_terms(spec)
+    keep = [i for i, n in enumerate(names * spec.observation.stack) if n not in terms]
+    return None if len(keep) == len(names) * spec.observation.stack else keep
 
 
 def discriminator_inputs(spec) -> list[int] | None:
