@@ -11,7 +11,7 @@ from .discriminator import augment
 from .fitting import DiscriminatorFit, Transitions, make_batch
 from .generator import current_original_obs, normalize_obs, original_obs, transitions_batch
 from .history import PolicyHistory
-from .ranking import RankedRollouts
+from .ranking import RankedRollouts, support_loss
 from .scaling import ReturnScale
 
 
@@ -22,7 +22,7 @@ class AdversarialCallback(BaseCallback):
     that many earlier ones (raw observations, normalised and scored under the current policy when drawn).
     With `scale_reward` (the spec's default: AIRL yes, GAIL no), the generator's learned reward is divided by the
     running spread of its discounted return. With `ranked` rollouts, each discriminator step adds `ranking_weight`
-    times their ranking loss on shaped AIRL's r_psi."""
+    times their ranking loss on shaped AIRL's r_psi, and with `support_noise` the demonstrated states' support loss."""
 
     def __init__(
         self,
@@ -35,6 +35,7 @@ class AdversarialCallback(BaseCallback):
         scale_reward: bool = False,
         ranked: RankedRollouts | None = None,
         ranking_weight: float = 0.0,
+        support_noise: float = 0.0,
     ):
         super().__init__()
         self.fit, self.disc, self.expert, self.n_epochs = fit, fit.disc, expert, epochs
@@ -44,6 +45,7 @@ class AdversarialCallback(BaseCallback):
         self.stats: dict[str, float] = {}
         self.ranked, self.ranking_weight = ranked, ranking_weight
         self.ranking_rng = np.random.default_rng(seed + 1)
+        self.support_noise = support_noise
         self._frozen_states: torch.Tensor | None = None
 
     def _on_rollout_start(self) -> None:
@@ -98,6 +100,11 @@ class AdversarialCallback(BaseCallback):
         self._frozen_states = states if frozen else None
         return states
 
+    def _ranking_loss(self, states: torch.Tensor, shown: torch.Tensor) -> torch.Tensor:
+        """The ranked rollouts' loss plus the demonstrated states' support loss."""
+        rng = self.ranking_rng
+        return self.ranked.loss(self.disc, states, rng) + support_loss(self.disc, shown, rng, self.support_noise)
+
     def _on_rollout_end(self) -> None:
         buf = self.model.rollout_buffer
         n, e = buf.buffer_size, buf.n_envs
@@ -108,7 +115,8 @@ class AdversarialCallback(BaseCallback):
         expert = transitions_batch(self.model, self.expert, self.disc)
         if self.ranked is not None:
             states = self._ranked_states()
-            self.fit.ranking = lambda: self.ranking_weight * self.ranked.loss(self.disc, states, self.ranking_rng)
+            shown = expert.s[expert.s[:, -1] == 0]
+            self.fit.ranking = lambda: self.ranking_weight * self._ranking_loss(states, shown)
         self.stats.update(self.fit.epochs(policy, expert, self.n_epochs))
         self.stats.update(self.fit.reward_stats(rollout, expert))
         with torch.no_grad():

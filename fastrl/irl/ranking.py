@@ -155,3 +155,15 @@ class RankedRollouts:
         t = np.minimum(start[:, None] + np.arange(self.snippet), steps - 1)
         margin = disc.reward(states[better[:, None], t]).sum(-1) - disc.reward(states[worse[:, None], t]).sum(-1)
         return torch.nn.functional.softplus(-margin).mean()
+
+
+def support_loss(disc: Discriminator, shown: torch.Tensor, rng: np.random.Generator, spread: float, rows: int = 256):
+    """Mean -log P(r_psi rates a demonstrated state above a copy with Gaussian noise of `spread` on its normalised
+    observation) over `rows` random states of `shown` (augmented, none absorbing): what the demonstrations never
+    do ranks below what they do nearby. Zero, drawing nothing, where `spread` is 0."""
+    if not spread or not len(shown):
+        return torch.zeros(())
+    s = shown[torch.as_tensor(rng.integers(0, len(shown), rows))]
+    noise = torch.as_tensor(rng.standard_normal(s.shape) * spread, dtype=s.dtype)
+    noise[:, -1] = 0.0  # the absorbing flag stays
+    return torch.nn.functional.softplus(disc.reward(s + noise) - disc.reward(s)).mean()

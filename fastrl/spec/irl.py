@@ -82,6 +82,14 @@ class DiscriminatorSettings(Strict):
         description="also rank copies of the demonstrations degraded at each `ranking_noise` rate by these "
         "kinematic overlays (fastrl.data.overlays), pairs of the same source only; true: drift, jitter, slowed",
     )
+    ranking_support: float = Field(
+        0.0,
+        ge=0,
+        le=10,
+        description="shaped AIRL on PPO, with `ranking`: r_psi must also rate each demonstrated state above a copy "
+        "with Gaussian noise of this spread on its normalised observation (a support prior: what the "
+        "demonstrations never do ranks below what they do nearby; normalised observations are clipped at 10); 0: none",
+    )
     average_every: int = Field(
         50000,
         ge=0,

@@ -16,7 +16,7 @@ from fastrl.irl import AdversarialCallback, Discriminator, DiscriminatorForm
 from fastrl.irl.demonstrations import expert_transitions
 from fastrl.irl.discriminator import absorbing_states, augment
 from fastrl.irl.fitting import DiscriminatorFit, input_gradient_norm, make_batch
-from fastrl.irl.ranking import RankedRollouts, noisy_expert_rollout, noisy_rollouts_batched
+from fastrl.irl.ranking import RankedRollouts, noisy_expert_rollout, noisy_rollouts_batched, support_loss
 from fastrl.runner.train.cloned import ClonedActor
 from fastrl.spec import SpecError, load_spec
 from fastrl.spec.columns import discriminator_inputs, reward_inputs
@@ -305,6 +305,31 @@ def test_the_ranking_loss_teaches_r_psi_that_less_noise_is_better():
         assert float(ranked.loss(disc, states, rng)) < first
     means = [totals[ranked.noise == eps].mean() for eps in (0.0, 0.5, 1.0)]
     assert means[0] > means[1] > means[2], means
+
+
+def test_the_support_loss_teaches_r_psi_that_demonstrated_states_beat_their_noisy_copies():
+    env = fastrl.make(load_spec(spec_file("tracelines")))
+    obs = expert_transitions(env, expert_trajectories(env, [3, 4])).obs
+    shown = augment(torch.as_tensor((obs - obs.mean(0)) / (obs.std(0) + 1e-6), dtype=torch.float32))
+    torch.manual_seed(0)
+    disc = Discriminator(obs.shape[1], DiscriminatorForm(kind="airl", gamma=0.99, hidden=(32, 32)))
+    rng = np.random.default_rng(0)
+    assert float(support_loss(disc, shown, rng, 0.0)) == 0.0
+    assert rng.bit_generator.state == np.random.default_rng(0).bit_generator.state  # off: draws nothing
+    optim = torch.optim.Adam(disc.parameters(), lr=1e-3)
+    with torch.no_grad():
+        first = float(support_loss(disc, shown, np.random.default_rng(1), 1.0))
+    for _ in range(200):
+        loss = support_loss(disc, shown, rng, 1.0)
+        optim.zero_grad()
+        loss.backward()
+        optim.step()
+    with torch.no_grad():
+        assert float(support_loss(disc, shown, np.random.default_rng(1), 1.0)) < 0.5 * first
+        noisy = shown + torch.as_tensor(np.random.default_rng(2).standard_normal(shown.shape), dtype=torch.float32)
+        noisy[:, -1] = 0.0
+        above = (disc.reward(shown) > disc.reward(noisy)).float().mean()
+    assert float(above) > 0.8  # fresh noisy copies: the demonstrated state is rated higher
 
 
 def test_a_held_random_action_is_repeated_for_its_steps():
