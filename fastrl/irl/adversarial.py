@@ -22,7 +22,7 @@ class AdversarialCallback(BaseCallback):
     that many earlier ones (raw observations, normalised and scored under the current policy when drawn).
     With `scale_reward` (the spec's default: AIRL yes, GAIL no), the generator's learned reward is divided by the
     running spread of its discounted return. With `ranked` rollouts, each discriminator step adds `ranking_weight`
-    times their ranking loss on shaped AIRL's r_psi, and with `support_noise` the demonstrated states' support loss."""
+    times their ranking loss on shaped AIRL's r_psi, and with `support_spread` the demonstrated states' support loss."""
 
     def __init__(
         self,
@@ -35,7 +35,7 @@ class AdversarialCallback(BaseCallback):
         scale_reward: bool = False,
         ranked: RankedRollouts | None = None,
         ranking_weight: float = 0.0,
-        support_noise: float = 0.0,
+        support_spread: float = 0.0,
     ):
         super().__init__()
         self.fit, self.disc, self.expert, self.n_epochs = fit, fit.disc, expert, epochs
@@ -45,7 +45,7 @@ class AdversarialCallback(BaseCallback):
         self.stats: dict[str, float] = {}
         self.ranked, self.ranking_weight = ranked, ranking_weight
         self.ranking_rng = np.random.default_rng(seed + 1)
-        self.support_noise = support_noise
+        self.support_spread = support_spread
         self._frozen_states: torch.Tensor | None = None
 
     def _on_rollout_start(self) -> None:
@@ -103,7 +103,7 @@ class AdversarialCallback(BaseCallback):
     def _ranking_loss(self, states: torch.Tensor, shown: torch.Tensor) -> torch.Tensor:
         """The ranked rollouts' loss plus the demonstrated states' support loss."""
         rng = self.ranking_rng
-        return self.ranked.loss(self.disc, states, rng) + support_loss(self.disc, shown, rng, self.support_noise)
+        return self.ranked.loss(self.disc, states, rng) + support_loss(self.disc, shown, rng, self.support_spread)
 
     def _on_rollout_end(self) -> None:
         buf = self.model.rollout_buffer

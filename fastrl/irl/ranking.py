@@ -5,6 +5,7 @@ steps if asked, so that the scope also wanders into the walls): more noise, wors
 step then asks r_psi to sum higher over a snippet of a less noisy rollout than over the same time steps of a
 noisier one (Bradley-Terry), so the reward also orders behaviour far from the expert's.
 A rollout that ended (the task done) continues in the absorbing state up to the time limit.
+The support loss asks r_psi to rate each demonstrated state above a noisy copy of it.
 """
 
 from __future__ import annotations
@@ -157,7 +158,9 @@ class RankedRollouts:
         return torch.nn.functional.softplus(-margin).mean()
 
 
-def support_loss(disc: Discriminator, shown: torch.Tensor, rng: np.random.Generator, spread: float, rows: int = 256):
+def support_loss(
+    disc: Discriminator, shown: torch.Tensor, rng: np.random.Generator, spread: float, rows: int = 256
+) -> torch.Tensor:
     """Mean -log P(r_psi rates a demonstrated state above a copy with Gaussian noise of `spread` on its normalised
     observation) over `rows` random states of `shown` (augmented, none absorbing): what the demonstrations never
     do ranks below what they do nearby. Zero, drawing nothing, where `spread` is 0."""

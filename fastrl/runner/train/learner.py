@@ -225,7 +225,7 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
             scale_reward=d.scale_reward,
             ranked=ranked,
             ranking_weight=d.ranking,
-            support_noise=d.ranking_support,
+            support_spread=d.ranking_support,
         )
     averaging = RewardAveraging(disc, d.average_every) if d.average_every and disc.shaped else None
     learner = Learner(spec, venv, model, [cb, *([averaging] if averaging else [])], disc, demos, averaging, console)
