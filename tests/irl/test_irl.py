@@ -307,9 +307,8 @@ def test_the_ranking_loss_teaches_r_psi_that_less_noise_is_better():
     assert means[0] > means[1] > means[2], means
 
 
-def test_the_support_loss_teaches_r_psi_that_demonstrated_states_beat_their_noisy_copies():
-    env = fastrl.make(load_spec(spec_file("tracelines")))
-    obs = expert_transitions(env, expert_trajectories(env, [3, 4])).obs
+def test_the_support_loss_teaches_r_psi_that_demonstrated_states_beat_their_noisy_copies(expert_data):
+    obs = expert_data[1].obs
     shown = augment(torch.as_tensor((obs - obs.mean(0)) / (obs.std(0) + 1e-6), dtype=torch.float32))
     torch.manual_seed(0)
     disc = Discriminator(obs.shape[1], DiscriminatorForm(kind="airl", gamma=0.99, hidden=(32, 32)))
