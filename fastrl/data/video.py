@@ -43,6 +43,13 @@ def _av():
     return av
 
 
+def _scaling(av):
+    """swscale's flags for every conversion here: area averaging, bit-exact, accurate rounding."""
+    # with one thread (faster at these sizes than swscale's own threads), so the same frames give the same pixels
+    i = av.video.reformatter.Interpolation
+    return i.AREA | i.ACCURATE_RND | i.BITEXACT
+
+
 def _text(error: Exception) -> str:
     """An FFmpeg error's reason in one line, without its errno and file name."""
     return " ".join(str(getattr(error, "strerror", None) or error).split()) or type(error).__name__
@@ -91,6 +98,7 @@ def read_video(path: Path, size: tuple[int, int] | None = None, exact_size: bool
         out_w, out_h = size or (w, h)
         frames, times, dropped = [], [], 0
         reformatter = av.video.reformatter.VideoReformatter()  # one for the file: a frame's own makes a new context
+        scaling = _scaling(av)
         base = stream.time_base or Fraction(1, 1)
         rate = float(stream.average_rate or stream.guessed_rate or 0) or None
         try:
@@ -101,7 +109,9 @@ def read_video(path: Path, size: tuple[int, int] | None = None, exact_size: bool
                 if times and t <= times[-1]:
                     dropped += 1
                     continue
-                rgb = reformatter.reformat(frame, format="rgb24", width=out_w, height=out_h, interpolation="AREA")
+                rgb = reformatter.reformat(
+                    frame, format="rgb24", width=out_w, height=out_h, interpolation=scaling, threads=1
+                )
                 frames.append(rgb.to_ndarray())
                 times.append(t)
                 if len(frames) * out_w * out_h * 3 > MAX_DECODED_BYTES:
@@ -140,7 +150,9 @@ def _check_size(path: Path, have: tuple[int, int], want: tuple[int, int] | None,
 
 # codec: (encoder, largest crf, encoder options); one thread each, so the same frames give the same bytes
 CODECS = {
-    "h264": ("libx264", 51, {"bf": "0", "threads": "1"}),  # no B-frames
+    # no B-frames; no macroblock tree: with it, about one encode in two gave other bytes for the same frames in a
+    # process that had rendered before (the pose estimator's training frames, every score from video)
+    "h264": ("libx264", 51, {"bf": "0", "threads": "1", "mbtree": "0"}),
     "av1": ("libsvtav1", 63, {"preset": "8", "svtav1-params": "lp=1:pred-struct=1"}),  # low delay: no reordering
 }
 
@@ -172,6 +184,8 @@ def write_video(
     rate = Fraction(fps).limit_denominator(1001)
     os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1 prints its banner to stderr unless told: errors only
 
+    scaling = _scaling(av)
+
     def encode(f) -> None:
         with av.open(f, mode="w", format="mp4") as container:
             stream = container.add_stream(encoder, rate=rate)
@@ -180,8 +194,7 @@ def write_video(
             stream.codec_context.thread_count = 1
             for i, rgb in enumerate(frames):
                 frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(rgb), format="rgb24")
-                if (w, h) != (rgb.shape[1], rgb.shape[0]):
-                    frame = frame.reformat(width=w, height=h, interpolation="AREA")
+                frame = frame.reformat(width=w, height=h, format="yuv420p", interpolation=scaling, threads=1)
                 frame.pts = i
                 container.mux(stream.encode(frame))
             container.mux(stream.encode(None))
