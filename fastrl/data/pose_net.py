@@ -14,7 +14,7 @@ from torch import nn
 from ..atomic import atomic_write
 
 INPUT = 64  # frames are averaged down to INPUT x INPUT before the network sees them
-VERSION = 2  # of the network and its training: a change here makes every cached estimator stale
+VERSION = 3  # of the network and its training: a change here makes every cached estimator stale
 
 
 def downsample(frames: np.ndarray) -> np.ndarray:

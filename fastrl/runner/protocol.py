@@ -149,9 +149,9 @@ def run_protocol(
     spec = load_spec(spec_path, overrides)
     run, skipped = None, []
     if video_files(inputs)[0]:  # poses read off videos are coarser: the cue's centring tolerance widens with them
-        overrides = [*overrides, *video_overrides(spec)]
+        recorded, overrides = spec, [*overrides, *video_overrides(spec)]
         spec = load_spec(spec_path, overrides)
-        run, inputs, skipped = _from_videos(inputs, spec, root, algorithm, console, progress)
+        run, inputs, skipped = _from_videos(inputs, spec, recorded, root, algorithm, console, progress)
     ranked, unusable = rank_recordings(spec, inputs, by, top)
     skipped += unusable
     if not ranked:
@@ -251,11 +251,13 @@ def assess_seeds(
     return done
 
 
-def _from_videos(inputs, spec, root: Path, algorithm: str, console: Console, progress: bool):
+def _from_videos(inputs, spec, recorded, root: Path, algorithm: str, console: Console, progress: bool):
     """(the run folder, the inputs, skipped videos): the run starts here and holds the videos' estimated trajectories
-    (from_video/) and the pose estimator that read them."""
+    (from_video/) and the pose estimator that read them; `recorded` is the spec before the video's overrides."""
     run = new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
-    inputs, batch, source = videos_as_trajectories(inputs, spec, run / "from_video", console=console, progress=progress)
+    inputs, batch, source = videos_as_trajectories(
+        inputs, spec, run / "from_video", recorded=recorded, console=console, progress=progress
+    )
     shutil.copy2(source, run / source.name)  # `fastrl score --run RUN/learned VIDEOS` reads with the same estimator
     return run, inputs, batch.errors
 

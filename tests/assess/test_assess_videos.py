@@ -9,7 +9,7 @@ from typer.testing import CliRunner
 
 import fastrl
 from fastrl.cli import app
-from fastrl.data import Trajectory, pose_net
+from fastrl.data import Trajectory, pose_net, video_poses
 from fastrl.data.cohort import make_cohort
 from fastrl.data.pose_frames import labelled_frames
 from fastrl.data.render_video import write_trajectory_video
@@ -75,3 +75,26 @@ def test_assess_learns_from_videos_alone_and_scores_them_later(videos, tmp_path,
     assert res.exit_code == 0, res.output
     assert json.loads(new.read_text())["trajectories"][0]["reward"] is not None
     assert not (tmp_path / "empty-cache").exists()
+
+
+def test_a_new_estimator_learns_from_frames_rendered_as_the_videos_were(videos, tmp_path, monkeypatch):
+    folder, _ = videos
+    monkeypatch.setenv("FASTRL_CACHE", str(tmp_path / "cache"))
+    learned_under, train = [], video_poses.train_estimator
+
+    def small(env, progress=None):
+        """The real training, on a tiny budget; notes the cue the frames were rendered under."""
+        learned_under.append(env.unwrapped.task_spec.task.cue.centring_deg)
+        return train(env, episodes=2, epochs=1, progress=progress)
+
+    monkeypatch.setattr(video_poses, "train_estimator", small)
+    res = CliRunner().invoke(
+        app,
+        ["assess", str(folder / "L1-S01.mp4"), str(folder / "L3-S01.mp4"), "--spec", str(NO_EXPERT), "--set", AT_64[0]]
+        + ["--top", "1", "-o", str(tmp_path / "scores.json"), "--runs", str(tmp_path), "--no-progress"],
+    )
+    assert res.exit_code == 0, res.output
+    # the videos' own cue (a wider one colours the avatars green on other views), while the replay widens it
+    assert learned_under == [load_spec(NO_EXPERT).task.cue.centring_deg]
+    run = next(tmp_path.glob("medial_pair/*-assess-airl-s0"))
+    assert load_spec(run / "learned" / "spec.yaml").task.cue.centring_deg == VIDEO_CENTRING * learned_under[0]

@@ -48,10 +48,18 @@ def _bar(progress: bool, console: Console) -> Progress:
 
 
 def videos_as_trajectories(
-    inputs: list[Path], spec: TaskSpec, folder: Path, *, places=(), console: Console, progress: bool = True
+    inputs: list[Path],
+    spec: TaskSpec,
+    folder: Path,
+    *,
+    recorded: TaskSpec | None = None,
+    places=(),
+    console: Console,
+    progress: bool = True,
 ) -> tuple[list[Path], Batch, Path | None]:
     """The inputs with their videos replaced by `folder`, where each video's estimated trajectory is written; the
-    batch (written pairs, one line per skipped video) and the estimator's file (None without videos)."""
+    batch (written pairs, one line per skipped video) and the estimator's file (None without videos). `recorded`:
+    the spec the videos were recorded under, where it differs from `spec` (a new estimator learns its frames)."""
     videos, rest = video_files(inputs)
     batch = Batch()
     if not videos:
@@ -59,7 +67,9 @@ def videos_as_trajectories(
     from ...data.video_poses import estimator_for, video_trajectory  # here: scoring trajectories needs no torch
 
     w, h = endoscope_size(spec)
-    env = FastEnv(spec, width=w, height=h)  # renders as the task's videos are rendered
+    # renders as the videos were: the cue's tolerances colour the avatars, and an estimator that learned from frames
+    # of a wider cue than the videos' read their poses worse (RESULTS: scores from the endoscope video)
+    env = FastEnv(recorded or spec, width=w, height=h)
     with _bar(progress, console) as bar:
         job = bar.add_task("pose estimator", total=None)
 
