@@ -45,7 +45,7 @@ def _av():
 
 def _scaling(av):
     """swscale's flags for every conversion here: area averaging, bit-exact, accurate rounding."""
-    # with one thread (faster at these sizes than swscale's own threads), so the same frames give the same pixels
+    # the callers add threads=1 (faster at these sizes than swscale's own threads): the same frames, the same pixels
     i = av.video.reformatter.Interpolation
     return i.AREA | i.ACCURATE_RND | i.BITEXACT
 
