@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 from scipy.signal import savgol_filter
 
+from ..cache import cache_dir
 from ..spec import task_hash, world_hash
 from ..spec.models import TaskSpec
-from .cache import cache_dir
 from .pose_net import VERSION, PoseEstimator, fit, load, save
 from .trajectory import Trajectory
 from .video_import import endoscope_size, import_video

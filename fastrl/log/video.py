@@ -11,7 +11,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from ..atomic import fsync_dir
-from ..data.cache import cache_dir
+from ..cache import cache_dir
 from .assessment import skip_pandas_probe
 from .stream import saved_stream
 

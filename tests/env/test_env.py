@@ -328,21 +328,26 @@ def test_late_starts_run_the_clock_on_unseeded_resets_only():
     assert truncated and steps == left
 
 
-def test_line_distance_grid_filled_tile_by_tile_is_the_whole_grid_at_once():
+def test_line_distance_grid_is_computed_once_then_read_from_the_cache(tmp_path, monkeypatch):
     from scipy.spatial import cKDTree
 
     from fastrl.env.sensing import DistanceGrid
     from fastrl.spec.geometry import sample_polyline
 
+    monkeypatch.setenv("FASTRL_CACHE", str(tmp_path))
     line = np.array([[0.04, -0.04], [0.01, -0.01], [-0.01, 0.03], [-0.05, 0.04]])
     grid = DistanceGrid(line, extent=0.05)
-    near = grid(0.01, -0.01)  # on the line: one tile filled, the rest still at the cap
-    assert near < 1e-3 and sum(map(sum, grid.ready)) == 1
-    points = np.random.default_rng(0).uniform(-0.06, 0.06, (3000, 2))
-    lazily = [grid(x, y) for x, y in points]
     xs = grid.axis
     gx, gy = np.meshgrid(xs, xs, indexing="ij")
     tree = cKDTree(sample_polyline(line, 0.25 * grid.cell))
     whole = np.minimum(tree.query(np.column_stack([gx.ravel(), gy.ravel()]))[0], grid.cap).reshape(gx.shape)
-    assert all(map(all, grid.ready)) and np.array_equal(np.array(grid.grid), whole)
-    assert lazily == [grid(x, y) for x, y in points] and max(lazily) == grid.cap  # outside the grid: the cap
+    assert np.array_equal(grid.values, whole) and np.array_equal(np.array(grid.grid), whole)
+    (saved,) = (tmp_path / "line-distance").glob("*.npy")
+    saved.write_bytes(b"\x93NUMPY" + b"\x00" * 40)  # corrupt: computed again, the same
+    assert np.array_equal(DistanceGrid(line, extent=0.05).values, whole)
+    np.save(saved, np.zeros_like(whole))  # what the cache holds is what is read (no second computation)
+    assert not DistanceGrid(line, extent=0.05).values.any()
+    assert DistanceGrid(line, extent=0.06).values.shape != whole.shape  # another grid: another file
+    points = np.random.default_rng(0).uniform(-0.06, 0.06, (3000, 2))
+    one_by_one = [grid(x, y) for x, y in points]
+    assert np.array_equal(grid.lookup(points[:, 0], points[:, 1]), one_by_one) and max(one_by_one) == grid.cap

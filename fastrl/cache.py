@@ -1,4 +1,4 @@
-"""Where fastrl keeps what it makes once per machine (pose estimators, an ffmpeg link): torch-free."""
+"""Where fastrl keeps what it makes once per machine (pose estimators, an ffmpeg link, line distances): stdlib only."""
 
 from __future__ import annotations
 
