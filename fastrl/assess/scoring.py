@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..data.inverse import to_control_rate
-from ..data.replay import replay
+from ..data.replay import replay_for_scores
 from ..data.trajectory import VIDEO_ONLY, Trajectory, TrajectoryError
 from ..env.fast_env import FastEnv
 from ..model.kinematics import Kinematics
@@ -104,15 +104,15 @@ class Scorer:
         """Replay one trajectory and score all but the learned scores; also its observations (for add_learned).
         A trajectory that stops before it succeeds and before the time limit is scored as if the trainee then held
         the scope still until the limit (quitting is not finishing fast)."""
-        tips, given = [], len(traj.time)
+        given = len(traj.time)
         traj = held_to_limit(traj, self.spec, given) or traj  # its first `given` samples are the trajectory's own
-        obs, infos, rewards = replay(self.env, traj, lambda u: tips.append(u.state.tip_pos))
-        n, last = len(obs), infos[-1]
-        added = held_still(self.spec, given, n, last["success"])
-        time, tip = traj.time[:n] - traj.time[0], np.array(tips)
+        done = replay_for_scores(self.env, traj)
+        n, tip = len(done.observations), done.tips
+        added = held_still(self.spec, given, n, done.success)
+        time = traj.time[:n] - traj.time[0]
         scores = {
-            "heuristic": float(rewards.sum()),
-            "subtasks": last["subtask"] / max(1, last["subtasks_total"]),
+            "heuristic": float(done.rewards.sum()),
+            "subtasks": done.subtasks / max(1, done.subtasks_total),
             "path_length": path_length(tip),
             "time": float(time[-1]),
             "smoothness": log_dimensionless_jerk(tip, time),
@@ -121,15 +121,15 @@ class Scorer:
             "potential": None,
         }
         if self.anatomy is not None:
-            scores.update(tour_metrics(tip, [i["contacts"] for i in infos], self.anatomy, self.spec.scene.radius))
+            scores.update(tour_metrics(tip, done.contacts.tolist(), self.anatomy, self.spec.scene.radius))
         meta = {
             **traj.meta,
             **({"held_still_s": added} if added else {}),
-            "success": bool(last["success"]),
-            "subtasks_done": int(last["subtask"]),
-            "subtasks_total": int(last["subtasks_total"]),
+            "success": done.success,
+            "subtasks_done": int(done.subtasks),
+            "subtasks_total": int(done.subtasks_total),
         }
-        return TrajectoryScores(name or str(traj.meta.get("subject", "")), meta, scores, time, tip), obs
+        return TrajectoryScores(name or str(traj.meta.get("subject", "")), meta, scores, time, tip), done.observations
 
     def add_learned(self, scored: TrajectoryScores, obs: np.ndarray) -> None:
         """Fill the learned reward, value and potential of a replayed trajectory (nothing without learned networks)."""

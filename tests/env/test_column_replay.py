@@ -1,0 +1,75 @@
+"""Replaying a recording by columns gives, bit for bit, what replaying it step by step gives."""
+
+import numpy as np
+import pytest
+
+from fastrl.assess.scoring import held_to_limit
+from fastrl.data.cohort import make_cohort
+from fastrl.data.replay import replay
+from fastrl.env.column_replay import can_replay_columns, replay_columns
+from fastrl.env.fast_env import FastEnv
+from fastrl.spec import load_spec
+from fastrl.terms import OBSERVATION_TERMS, REWARD_FEATURES, TaskState
+from fastrl.terms.columns import FEATURE_COLUMNS, OBSERVATION_COLUMNS, columns_of
+
+from ..conftest import spec_file
+
+
+def cohort(spec, env) -> list:
+    """A novice, a middling and an expert-like subject, and the best of them stopped at a third; each held still to
+    the time limit as scoring holds them."""
+    trajs = list(make_cohort(spec, 3, 1, seed=4, env=env, families=("classic", "paused", "jitter")))
+    best = trajs[-1]
+    trajs.append(type(best)(best.time[: len(best.time) // 3], best.portal[: len(best.time) // 3], best.meta))
+    return [held_to_limit(t, spec, len(t.time)) or t for t in trajs]
+
+
+def stepwise(env, traj) -> tuple:
+    """Observations, rewards, infos, tips and each state of a replay step by step."""
+    tips, states = [], []
+
+    def keep(u):
+        tips.append(u.state.tip_pos)
+        states.append(TaskState())
+        states[-1].copy_from(u.state)
+
+    obs, infos, rewards = replay(env, traj, keep)
+    return obs, rewards, infos, np.array(tips), states
+
+
+@pytest.mark.parametrize("name", ["tracelines", "imagecentring", "liver_tour"])
+def test_a_replay_by_columns_is_the_replay_step_by_step(name):
+    spec = load_spec(spec_file(name))
+    env = FastEnv(spec)
+    assert can_replay_columns(env)
+    endings = set()
+    for traj in cohort(spec, env):
+        obs, rewards, infos, tips, _ = stepwise(env, traj)
+        got = replay_columns(env, traj.portal, int(traj.meta["seed"]))
+        assert np.array_equal(got.observations, obs) and got.observations.dtype == obs.dtype
+        assert np.array_equal(got.rewards, rewards) and np.array_equal(got.tips, tips)
+        assert np.array_equal(got.contacts, [i["contacts"] for i in infos])
+        assert (got.subtasks, got.subtasks_total) == (infos[-1]["subtask"], infos[-1]["subtasks_total"])
+        endings.add((got.success, len(rewards) < len(traj.time)))
+    assert (True, True) in endings and (False, False) in endings  # stopped by success, and replayed to the end
+
+
+def test_every_array_form_is_its_scalar_term():
+    spec = load_spec(spec_file("tracelines"))
+    env = FastEnv(spec)
+    states = [s for traj in cohort(spec, env) for s in stepwise(env, traj)[-1]]
+    cols = columns_of(states)
+    assert set(OBSERVATION_COLUMNS) <= set(OBSERVATION_TERMS) and set(FEATURE_COLUMNS) <= set(REWARD_FEATURES)
+    assert {s.completed for s in states} == {True, False} and len({s.subtask for s in states}) > 3
+    for name, form in OBSERVATION_COLUMNS.items():
+        expected = np.array([OBSERVATION_TERMS[name].fn(s) for s in states], float)
+        assert np.array_equal(np.asarray(form(cols), float).reshape(expected.shape), expected), name
+    for name, form in FEATURE_COLUMNS.items():
+        params = {"margin": 0.005} if name == "distance" else {}  # a narrow margin: the kernel's tails are read
+        expected = np.array([REWARD_FEATURES[name].fn(s, **params) for s in states])
+        assert np.array_equal(form(cols, **params), expected), name
+
+
+def test_tasks_whose_terms_have_no_array_form_replay_step_by_step():
+    assert not can_replay_columns(FastEnv(load_spec(spec_file("periscoping"))))  # its rays need the scene per step
+    assert not can_replay_columns(FastEnv(load_spec(spec_file("triangulation"))))  # an instrument
