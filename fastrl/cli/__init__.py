@@ -12,12 +12,15 @@ from rich.markup import escape
 
 from ..about import version_line
 from ..bundled import find_spec
+from ..long_lived import no_collection_at_exit
 from ..spec import SpecError, json_schema, load_spec, read_yaml
 from ..spec.migrate import OLD_LAYOUT, in_old_layout
 from . import typer_flags  # noqa: F401  (before any command: the --help of every one)
 
 if TYPE_CHECKING:
     from ..model import CompiledTask
+
+no_collection_at_exit()
 
 app = typer.Typer(
     name="fastrl",
