@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..data.inverse import to_control_rate
-from ..data.replay import replay_for_scores
+from ..data.replay import replay_arrays
 from ..data.trajectory import VIDEO_ONLY, Trajectory, TrajectoryError
 from ..env.fast_env import FastEnv
 from ..model.kinematics import Kinematics
@@ -106,7 +106,7 @@ class Scorer:
         the scope still until the limit (quitting is not finishing fast)."""
         given = len(traj.time)
         traj = held_to_limit(traj, self.spec, given) or traj  # its first `given` samples are the trajectory's own
-        done = replay_for_scores(self.env, traj)
+        done = replay_arrays(self.env, traj)
         n, tip = len(done.observations), done.tips
         added = held_still(self.spec, given, n, done.success)
         time = traj.time[:n] - traj.time[0]

@@ -9,7 +9,7 @@ import numpy as np
 from ..assess.figures import deviations
 from ..assess.references import expert_paths, reference_scores
 from ..assess.scoring import Scorer, normalise
-from ..data.replay import replay, rollout_trajectory
+from ..data.replay import replay_arrays, rollout_trajectory
 from ..data.trajectory import Trajectory
 
 
@@ -52,8 +52,7 @@ def attempt_feedback(
     }
     nets = scorer.networks
     if nets is not None and not scorer.learned:  # forward RL: a value but no learned reward
-        obs, _, _ = replay(scorer.env, traj)
-        values = nets.value(obs).astype(float)
+        values = nets.value(replay_arrays(scorer.env, traj).observations).astype(float)
         out["scores"]["value_mean"] = float(values.mean())
     if policy is not None:
         agent, _ = rollout_trajectory(

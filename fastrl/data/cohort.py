@@ -11,7 +11,7 @@ from ..spec.models import TaskSpec
 from .families import draw_mix, foreign_family, mixed_profile, overlay_severities
 from .instruments_trainee import TwoInstrumentTrainee
 from .overlays import overlaid
-from .replay import replay, rollout_trajectory
+from .replay import replay_arrays, rollout_trajectory
 from .trainee import Trainee
 from .trajectory import Trajectory
 
@@ -69,8 +69,9 @@ def with_overlays(env: FastEnv, traj: Trajectory, severities: dict[str, float], 
 
 def replayed_figures(env, traj: Trajectory) -> dict:
     """Heuristic return, subtasks done and duration of a trajectory, recomputed by replay."""
-    _, infos, rewards = replay(env, traj)
-    return {"return": float(rewards.sum()), "subtasks": int(infos[-1]["subtask"]), "duration": float(infos[-1]["time"])}
+    done = replay_arrays(env, traj)
+    duration = (len(done.rewards) - 1) * env.unwrapped.dt  # the env's clock at the last sample replayed
+    return {"return": float(done.rewards.sum()), "subtasks": int(done.subtasks), "duration": duration}
 
 
 def level_table(rows: list[dict]) -> list[dict]:

@@ -83,9 +83,10 @@ def replay(env, traj: Trajectory, on_sample: Callable | None = None) -> tuple[np
     return np.array(observations), infos, np.array(rewards)
 
 
-def replay_for_scores(env, traj: Trajectory) -> Replayed:
-    """What scoring needs of a replay: by columns where the task allows it (env/column_replay.py, the same numbers
-    in a quarter of the time), else step by step."""
+def replay_arrays(env, traj: Trajectory) -> Replayed:
+    """A recording's replay as scoring and learning read it (observations, rewards, tips, contacts, subtasks): by
+    columns where the task allows it (env/column_replay.py: the same numbers in a third of the time), else step by
+    step."""
     check_ranges(env, traj)
     if can_replay_columns(env):
         return replay_columns(env, traj.portal, int(traj.meta.get("seed", 0)))
@@ -96,13 +97,14 @@ def replay_for_scores(env, traj: Trajectory) -> Replayed:
 
 
 def replay_demonstrations(env, trajectories: list[Trajectory]):
-    """For each trajectory with actions: its replayed observations (n+1), infos (n+1) and actions (n)."""
+    """For each trajectory with actions: its replayed observations (n+1), whether it completed the task, and its
+    actions (n)."""
     for traj in trajectories:
         if traj.actions is None:
             continue
-        obs, infos, _ = replay(env, traj)
-        n = min(len(obs) - 1, len(traj.actions))
-        yield obs[: n + 1], infos[: n + 1], traj.actions[:n]
+        done = replay_arrays(env, traj)
+        n = min(len(done.observations) - 1, len(traj.actions))
+        yield done.observations[: n + 1], done.success, traj.actions[:n]
 
 
 def demonstration_pairs(env, trajectories: list[Trajectory]) -> tuple[np.ndarray, np.ndarray]:

@@ -22,6 +22,7 @@ from ..terms.columns import (
     norm,
 )
 from .dome_task import DomeTask
+from .sensing import avatar_ray_points
 from .tour_task import TourTask
 
 TERMINATIONS = {"subtasks_done"}  # the termination terms this replay knows
@@ -52,7 +53,6 @@ def can_replay_columns(env) -> bool:
         type(u.family) in (DomeTask, TourTask)
         and u.frames is None
         and u.stack == 1
-        and not u.family.sensor.rays
         and set(spec.observation.terms()) <= set(OBSERVATION_COLUMNS)
         and set(u.feature_names) <= set(FEATURE_COLUMNS)
         and set(spec.episode.terminations) <= TERMINATIONS
@@ -69,7 +69,8 @@ def replay_columns(env, portal: np.ndarray, seed: int) -> Replayed:
     u.reset(seed=seed, options={"portal": q[0]})
     ranges = u.task.ranges
     q = np.minimum(np.maximum(q, ranges[:, 0]), ranges[:, 1])
-    pos, mat, contacts = _kinematics(u, q)
+    still = np.concatenate([[False], (q[1:] == q[:-1]).all(axis=1)]).tolist()  # the same pose: the same kinematics
+    pos, mat, contacts = _kinematics(u, q, still)
     k = 1.0 / u.state.dt
     vel, accel, rate, qvel = (np.zeros(s) for s in (pos.shape, pos.shape, (len(q), 4), q.shape))
     vel[1:] = (pos[1:] - pos[:-1]) * k
@@ -86,10 +87,13 @@ def replay_columns(env, portal: np.ndarray, seed: int) -> Replayed:
     end = cue["end"]
     sensor = u.family.sensor
     line = sensor.line_deviations(pos, cam["fwd"]) if sensor.line is not None else np.zeros(len(q))
+    if sensor.rays:
+        rays = _ray_fractions(u, q, pos, cam["fwd"], still, cue["feature_target"], end)
     samples = {
         "tip_pos": pos, "cam_pos": pos, "tip_quat": quat, "tip_vel": vel, "tip_quat_rate": rate, "tip_accel": accel,
         "tip_speed": norm(vel), "cam_fwd": cam["fwd"], "cam_up": cam["up"], "cam_right": cam["right"],
         "portal": q, "portal_vel": qvel, "contacts": contacts, "line_deviation": line,
+        "ray_fraction": rays if sensor.rays else np.zeros(len(q)),
     }  # fmt: skip
     steps = np.arange(1, end)
     features = _columns(u, samples, errors, steps, cue["feature_target"][steps], cue["feature_dwell"][steps])
@@ -108,8 +112,9 @@ def replay_columns(env, portal: np.ndarray, seed: int) -> Replayed:
     return Replayed(obs.astype(np.float32), rewards, pos[:end], contacts[:end], cue["done"], len(u.family.t_pos))
 
 
-def _kinematics(u, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Camera positions (n, 3), rotations (n, 9) and contact counts (n,) at each sample; the first is the reset's."""
+def _kinematics(u, q: np.ndarray, still: list[bool]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Camera positions (n, 3), rotations (n, 9) and contact counts (n,) at each sample; the first is the reset's.
+    A sample `still` at the previous one's pose takes its kinematics."""
     m, d, ct = u.model, u.data, u.task
     n, cam = len(q), ct.camera
     pos, mat, contacts = np.empty((n, 3)), np.empty((n, 9)), np.empty(n, np.int64)
@@ -117,7 +122,6 @@ def _kinematics(u, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     joints, lens = u.family.sensor.qslice, ct.lens_qadr
     pos[0], mat[0], contacts[0] = xpos, xmat, d.ncon
     lens_q = -q[:, 4]
-    still = np.concatenate([[False], (q[1:] == q[:-1]).all(axis=1)]).tolist()  # the same pose: the same kinematics
     for t in range(1, n):
         if still[t]:
             pos[t], mat[t], contacts[t] = pos[t - 1], mat[t - 1], contacts[t - 1]
@@ -128,6 +132,24 @@ def _kinematics(u, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         pos[t], mat[t], contacts[t] = xpos, xmat, d.ncon
     u.family.positions_only = True  # as after a replayed step: a later env.step completes the forward pass first
     return pos, mat, contacts
+
+
+def _ray_fractions(u, q, pos, fwd, still: list[bool], target: np.ndarray, end: int) -> np.ndarray:
+    """The share of its target's ray points each sample sees (Sensor.ray_fraction), the scene placed again at each
+    pose: the rays need it."""
+    fam, m, d, sensor = u.family, u.model, u.data, u.family.sensor
+    size, qpos, joints, lens = u.task.targets.size, d.qpos, sensor.qslice, u.task.lens_qadr
+    points = [avatar_ray_points(size, fam.t_pos[k], fam.t_fwd[k], fam.t_up[k]) for k in range(len(fam.t_pos))]
+    out, target = np.zeros(len(q)), target.tolist()
+    for t in range(1, end):
+        if t > 1 and still[t] and target[t] == target[t - 1]:
+            out[t] = out[t - 1]
+            continue
+        qpos[joints] = q[t]
+        qpos[lens] = -q[t, 4]
+        mujoco.mj_fwdPosition(m, d)
+        out[t] = sensor.ray_fraction(m, d, points[target[t]], tuple(pos[t].tolist()), tuple(fwd[t].tolist()))
+    return out
 
 
 def _target_errors(u, pos: np.ndarray, cam: dict) -> dict:

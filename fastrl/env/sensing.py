@@ -53,11 +53,7 @@ class Sensor:
         s.dist_lo, s.dist_hi = float(t.dist[k, 0]), float(t.dist[k, 1])
         s.dwell_time = float(t.dwell[k])
         if self.rays:
-            r = 0.8 * t.size
-            x = np.cross(up, fwd)
-            angles = np.linspace(0, 2 * math.pi, 4, endpoint=False)
-            ring = [pos + r * (math.cos(a) * x + math.sin(a) * up) for a in angles]
-            self.ray_points = [tuple(p) for p in (np.array([pos] + ring) + 2e-3 * fwd).tolist()]
+            self.ray_points = avatar_ray_points(t.size, pos, fwd, up)
 
     def read(self, s: TaskState, model: mujoco.MjModel, data: mujoco.MjData, first: bool) -> None:
         """Update the state from the data (positions current, as after mj_step1 or mj_forward)."""
@@ -114,7 +110,7 @@ class Sensor:
         u = s.target_up
         s.horizon = abs(math.atan2(dot(u, s.cam_right), dot(u, s.cam_up)))
         if self.rays:
-            s.ray_fraction = self._ray_fraction(model, data, s)
+            s.ray_fraction = self.ray_fraction(model, data, self.ray_points, s.cam_pos, s.cam_fwd)
         s.potential = cue_potential(s)
 
     def line_deviations(self, pos: np.ndarray, fwd: np.ndarray) -> np.ndarray:
@@ -133,13 +129,13 @@ class Sensor:
         k = pos[2] / fwd[2]
         return self.line_grid(pos[0] - fwd[0] * k, pos[1] - fwd[1] * k)
 
-    def _ray_fraction(self, model, data, s: TaskState) -> float:
-        """Share of avatar sample points in view and not occluded from the camera."""
+    def ray_fraction(self, model, data, points: list[tuple], c: tuple, f: tuple) -> float:
+        """Share of an avatar's ray points in view of a camera at c looking along f and not occluded (the scene
+        placed as the camera sees it)."""
         seen = 0
-        c, f = s.cam_pos, s.cam_fwd
         pnt, vec = self.ray_pnt, self.ray_vec
         pnt[:] = c
-        for p in self.ray_points:
+        for p in points:
             d = (p[0] - c[0], p[1] - c[1], p[2] - c[2])
             n = norm(d)
             if dot(d, f) < self.cos_half_fov * n:
@@ -148,7 +144,16 @@ class Sensor:
             hit = mujoco.mj_ray(model, data, pnt, vec, RAY_GROUPS, 1, self.ray_exclude, self.geomid)
             if hit < 0 or hit >= 1.0 - 1e-3 / n:  # distance in units of |vec|: beyond the point
                 seen += 1
-        return seen / len(self.ray_points)
+        return seen / len(points)
+
+
+def avatar_ray_points(size: float, pos: np.ndarray, fwd: np.ndarray, up: np.ndarray) -> list[tuple]:
+    """The points of an avatar that rays aim at: its centre and four on a ring, just in front of its face."""
+    r = 0.8 * size
+    x = np.cross(up, fwd)
+    angles = np.linspace(0, 2 * math.pi, 4, endpoint=False)
+    ring = [pos + r * (math.cos(a) * x + math.sin(a) * up) for a in angles]
+    return [tuple(p) for p in (np.array([pos] + ring) + 2e-3 * fwd).tolist()]
 
 
 class DistanceGrid:

@@ -17,7 +17,7 @@ import torch
 
 from ..agents.expert import ScriptedExpert
 from ..data.overlays import overlaid
-from ..data.replay import replay, rollout_trajectory
+from ..data.replay import replay_arrays, rollout_trajectory
 from ..data.trajectory import Trajectory
 from ..spec.irl import DiscriminatorSettings
 from .discriminator import Discriminator, absorbing_states, augment
@@ -86,8 +86,8 @@ def degraded_recording(
     hz = u.task_spec.episode.control_hz
     portal = overlaid(traj.portal, dict.fromkeys(overlays, eps), seed, hz, u.task.ranges)
     copy = Trajectory(traj.time[0] + np.arange(len(portal)) / hz, portal, traj.meta)
-    obs, infos, _ = replay(env, copy)
-    return obs.astype(np.float32), bool(infos[-1]["success"])
+    done = replay_arrays(env, copy)
+    return done.observations.astype(np.float32), done.success
 
 
 class RankedRollouts:

@@ -181,6 +181,7 @@ def contact(s: Columns) -> np.ndarray:
 # ---- reward features -----------------------------------------------------------------------------
 FEATURE_COLUMNS |= {
     "progress": _field("dwell_gain"),
+    "rays": _field("ray_fraction"),
     "completed": lambda s: s.completed.astype(float),
     "contact": lambda s: (s.contacts > 0).astype(float),
     "time": lambda s: np.ones(len(s.time)),

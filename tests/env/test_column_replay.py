@@ -37,7 +37,7 @@ def stepwise(env, traj) -> tuple:
     return obs, rewards, infos, np.array(tips), states
 
 
-@pytest.mark.parametrize("name", ["tracelines", "imagecentring", "liver_tour"])
+@pytest.mark.parametrize("name", ["tracelines", "imagecentring", "periscoping", "liver_tour"])
 def test_a_replay_by_columns_is_the_replay_step_by_step(name):
     spec = load_spec(spec_file(name))
     env = FastEnv(spec)
@@ -54,22 +54,23 @@ def test_a_replay_by_columns_is_the_replay_step_by_step(name):
     assert (True, True) in endings and (False, False) in endings  # stopped by success, and replayed to the end
 
 
-def test_every_array_form_is_its_scalar_term():
-    spec = load_spec(spec_file("tracelines"))
+@pytest.mark.parametrize("name", ["tracelines", "periscoping"])  # the line's deviation; the rays
+def test_every_array_form_is_its_scalar_term(name):
+    spec = load_spec(spec_file(name))
     env = FastEnv(spec)
     states = [s for traj in cohort(spec, env) for s in stepwise(env, traj)[-1]]
     cols = columns_of(states)
     assert set(OBSERVATION_COLUMNS) <= set(OBSERVATION_TERMS) and set(FEATURE_COLUMNS) <= set(REWARD_FEATURES)
     assert {s.completed for s in states} == {True, False} and len({s.subtask for s in states}) > 3
-    for name, form in OBSERVATION_COLUMNS.items():
-        expected = np.array([OBSERVATION_TERMS[name].fn(s) for s in states], float)
-        assert np.array_equal(np.asarray(form(cols), float).reshape(expected.shape), expected), name
-    for name, form in FEATURE_COLUMNS.items():
-        params = {"margin": 0.005} if name == "distance" else {}  # a narrow margin: the kernel's tails are read
-        expected = np.array([REWARD_FEATURES[name].fn(s, **params) for s in states])
-        assert np.array_equal(form(cols, **params), expected), name
+    assert len({s.ray_fraction if name == "periscoping" else s.line_deviation for s in states}) > 3
+    for term, form in OBSERVATION_COLUMNS.items():
+        expected = np.array([OBSERVATION_TERMS[term].fn(s) for s in states], float)
+        assert np.array_equal(np.asarray(form(cols), float).reshape(expected.shape), expected), term
+    for feature, form in FEATURE_COLUMNS.items():
+        params = {"margin": 0.005} if feature == "distance" else {}  # a narrow margin: the kernel's tails are read
+        expected = np.array([REWARD_FEATURES[feature].fn(s, **params) for s in states])
+        assert np.array_equal(form(cols, **params), expected), feature
 
 
 def test_tasks_whose_terms_have_no_array_form_replay_step_by_step():
-    assert not can_replay_columns(FastEnv(load_spec(spec_file("periscoping"))))  # its rays need the scene per step
     assert not can_replay_columns(FastEnv(load_spec(spec_file("triangulation"))))  # an instrument

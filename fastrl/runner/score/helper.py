@@ -128,7 +128,8 @@ class Helper:
     def __init__(self, scorer: Scorer):
         self.scorer = scorer
         self.counter = context().Value("q", 0)
-        self.pool = Worker(initializer=_adopt, initargs=(scorer, self.counter))
+        # orphan_exit: a killed parent may leave the worker idle between two tasks, where it would wait for ever
+        self.pool = Worker(initializer=_adopt, initargs=(scorer, self.counter), orphan_exit=True)
 
     @staticmethod
     def worth_it(n_files: int) -> bool:
