@@ -2,7 +2,7 @@
 scalar term, in the same order, over every sample of a trajectory at once. A state's columns hold (T,) arrays for
 its scalars and (T, k) arrays for its tuples; the fixed ones (time limit, ranges, gamma) stay scalars or tuples.
 
-`tests/terms/test_columns.py` checks each form against its scalar term on the states of real replays."""
+`tests/env/test_column_replay.py` checks each form against its scalar term on the states of real replays."""
 
 from __future__ import annotations
 
