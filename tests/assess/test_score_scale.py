@@ -25,6 +25,7 @@ from fastrl.runner.score import archive, assessment
 from fastrl.runner.score.archive import sample_indices
 from fastrl.runner.score.assessment import assess
 
+from ..conftest import spec_file
 from .test_assess import _spec, airl_run, degraded  # noqa: F401 (airl_run: the tiny real AIRL run, a fixture)
 
 
@@ -124,6 +125,29 @@ def test_after_a_kill_the_helper_stops_and_a_rerun_scores_only_the_files_not_jou
     assert res.returncode == 0, res.stderr
     assert f"scored 72 trajectories ({len(first)} read from the journal)" in res.stdout
     assert sorted(journaled(journal)) == sorted(map(str, many.glob("*.npz")))  # each file once
+
+
+IDLE_HELPER = """
+import os, signal, sys
+from fastrl.assess.scoring import Scorer
+from fastrl.runner.score.helper import Helper
+from fastrl.spec import load_spec
+helper = Helper(Scorer(load_spec(sys.argv[1])))
+print(helper.submit(os.getpid).result(), flush=True)  # the worker's pid; it then waits for its next task
+os.kill(os.getpid(), signal.SIGKILL)
+"""
+
+
+def test_a_scoring_helper_left_idle_by_a_killed_parent_exits(tmp_path):
+    out = tmp_path / "pid.txt"
+    with open(out, "w") as f:
+        cmd = [sys.executable, "-c", IDLE_HELPER, str(spec_file("tracelines"))]
+        assert subprocess.run(cmd, stdout=f, stderr=subprocess.DEVNULL, timeout=120).returncode == -signal.SIGKILL
+    try:  # it watches its parent: no task will ever come
+        _, alive = psutil.wait_procs([psutil.Process(int(out.read_text()))], timeout=10)
+    except psutil.NoSuchProcess:
+        alive = []
+    assert all(p.status() == psutil.STATUS_ZOMBIE for p in alive)
 
 
 def test_a_corrupt_file_is_named_a_torn_line_rescored_and_another_scorers_journal_replaced(cohort, tmp_path):
