@@ -147,7 +147,7 @@ def _ray_fractions(u, q, pos, fwd, still: list[bool], target: np.ndarray, end: i
             continue
         qpos[joints] = q[t]
         qpos[lens] = -q[t, 4]
-        mujoco.mj_fwdPosition(m, d)
+        mujoco.mj_kinematics(m, d)  # rays read the geoms' poses only
         out[t] = sensor.ray_fraction(m, d, points[target[t]], tuple(pos[t].tolist()), tuple(fwd[t].tolist()))
     return out
 

@@ -35,7 +35,13 @@ def _feature(fn):
 def _libm(fn: Callable) -> Callable[..., np.ndarray]:
     """A `math` function over arrays, element by element: numpy's own acos, atan2, hypot and exp differ from the C
     library's, which the scalar terms use, in the last bit of about one value in ten."""
-    return lambda *arrays: np.array(list(map(fn, *(np.asarray(a, float).tolist() for a in arrays))), float)
+
+    def over(*arrays) -> np.ndarray:
+        """fn of each element of equally long 1-d arrays."""
+        columns = [np.asarray(a, float).tolist() for a in arrays]
+        return np.fromiter(map(fn, *columns), float, len(columns[0]))
+
+    return over
 
 
 acos, atan2, hypot, exp = _libm(math.acos), _libm(math.atan2), _libm(math.hypot), _libm(math.exp)
