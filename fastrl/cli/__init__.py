@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -11,10 +10,8 @@ from rich.console import Console
 from rich.markup import escape
 
 from ..about import version_line
-from ..bundled import find_spec
 from ..long_lived import no_collection_at_exit
-from ..spec import SpecError, json_schema, load_spec, read_yaml
-from ..spec.migrate import OLD_LAYOUT, in_old_layout
+from ..spec import SpecError, load_spec
 from . import typer_flags  # noqa: F401  (before any command: the --help of every one)
 
 if TYPE_CHECKING:
@@ -125,58 +122,7 @@ def main(
     """FAST arthroscopy tasks: YAML specs compiled to MuJoCo, trained and scored as RL."""
 
 
-@app.command()
-def check(
-    specs: Annotated[list[Path], typer.Argument(metavar="SPEC", help="task spec YAML files", show_default=False)],
-    set_: SetOpt = None,
-) -> None:
-    """Validate and compile task specs; print FILE:LINE errors and exit 2 if any is bad."""
-    bad = 0
-    for path in specs:
-        try:
-            task = load(path, set_)
-        except SpecError as e:
-            report(e)
-            bad += 1
-            continue
-        spec = task.spec
-        summary = f"{spec.task.kind}, {len(task.targets)} subtasks, {spec.actions.mode}"
-        out.print(f"[green]ok[/]  {escape(str(path))}  ({summary})")
-        if in_old_layout(read_yaml(find_spec(path))[0]):
-            out.print(f"    {OLD_LAYOUT}", markup=False)
-    if bad:
-        raise typer.Exit(code=2)
-
-
-@app.command()
-def schema(
-    output: Annotated[
-        Path | None, typer.Option("-o", "--output", help="write to this file", show_default=False)
-    ] = None,
-) -> None:
-    """Print the JSON Schema of task specs (for editors), or write it to a file."""
-    text = json.dumps(json_schema(), indent=2) + "\n"
-    if output is None:
-        typer.echo(text, nl=False)  # plain: no rich markup or wrapping inside the JSON
-        return
-    write_text(output, text)
-    out.print(f"wrote {output}", markup=False)
-
-
-@app.command(name="compile")
-def compile_(
-    spec: SpecArg,
-    output: Annotated[Path, typer.Option("-o", "--output", help="MJCF file to write", show_default=False)],
-    set_: SetOpt = None,
-) -> None:
-    """Compile a task spec and write the MuJoCo model (MJCF XML)."""
-    task = load_or_exit(spec, set_)
-    write_text(output, task.xml)
-    m = task.model
-    out.print(
-        f"wrote {escape(str(output))}  (nbody {m.nbody}, njnt {m.njnt}, ngeom {m.ngeom}, "
-        f"nu {m.nu}, timestep {m.opt.timestep:g} s)"
-    )
+from . import spec_files  # noqa: E402,F401  (check, schema, compile: listed in this order)
 
 
 @app.command()

@@ -9,6 +9,8 @@ from functools import lru_cache
 import mujoco
 import numpy as np
 
+from ..atomic import atomic_write
+from ..cache import cache_dir
 from ..model.compiler import CompiledTask
 from ..spec.geometry import sample_polyline
 from ..terms.rewards import cue_potential
@@ -205,9 +207,6 @@ def line_distances(points: np.ndarray, axis: np.ndarray, cell: float, cap: float
 
 def cached_grid(points: np.ndarray, axis: np.ndarray, cell: float, cap: float) -> np.ndarray:
     """line_distances, read from fastrl's cache where an earlier process wrote them (else computed and written)."""
-    from ..atomic import atomic_write
-    from ..cache import cache_dir
-
     key = hashlib.sha256(b"".join(np.ascontiguousarray(a, float).tobytes() for a in (points, axis, [cell, cap])))
     path = cache_dir() / "line-distance" / f"{key.hexdigest()[:24]}.npy"
     try:

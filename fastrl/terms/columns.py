@@ -14,7 +14,7 @@ import numpy as np
 
 from .rewards import _GAUSS
 
-Columns = SimpleNamespace  # a TaskState's fields as arrays over samples (what `columns_of` builds from states)
+Columns = SimpleNamespace  # a TaskState's fields as arrays over samples
 
 OBSERVATION_COLUMNS: dict[str, Callable[[Columns], np.ndarray]] = {}
 FEATURE_COLUMNS: dict[str, Callable[..., np.ndarray]] = {}
@@ -246,16 +246,3 @@ def shaft_motion(s: Columns) -> np.ndarray:
 def shaping(s: Columns) -> np.ndarray:
     """rewards.shaping."""
     return s.gamma * s.potential - s.prev_potential
-
-
-def columns_of(states: list) -> Columns:
-    """The columns of a list of TaskStates (every field; what a test compares the array forms on)."""
-    from .state import _fields
-
-    first = states[0]
-    cols = {}
-    for name in _fields(type(first)):
-        value = getattr(first, name)
-        fixed = name in ("time_limit", "dt", "gamma", "fov", "portal_lo", "portal_hi", "subtasks_total")
-        cols[name] = value if fixed else np.array([getattr(s, name) for s in states])
-    return Columns(**cols)

@@ -10,7 +10,8 @@ from fastrl.env.column_replay import can_replay_columns, replay_columns
 from fastrl.env.fast_env import FastEnv
 from fastrl.spec import load_spec
 from fastrl.terms import OBSERVATION_TERMS, REWARD_FEATURES, TaskState
-from fastrl.terms.columns import FEATURE_COLUMNS, OBSERVATION_COLUMNS, columns_of
+from fastrl.terms.columns import FEATURE_COLUMNS, OBSERVATION_COLUMNS, Columns
+from fastrl.terms.state import _fields
 
 from ..conftest import spec_file
 
@@ -22,6 +23,20 @@ def cohort(spec, env) -> list:
     best = trajs[-1]
     trajs.append(type(best)(best.time[: len(best.time) // 3], best.portal[: len(best.time) // 3], best.meta))
     return [held_to_limit(t, spec, len(t.time)) or t for t in trajs]
+
+
+FIXED = ("time_limit", "dt", "gamma", "fov", "portal_lo", "portal_hi", "subtasks_total")  # the same at every sample
+
+
+def columns_of(states: list) -> Columns:
+    """The columns of a list of TaskStates: each field as an array over them (the fixed ones as they are)."""
+    first = states[0]
+    return Columns(
+        **{
+            n: getattr(first, n) if n in FIXED else np.array([getattr(s, n) for s in states])
+            for n in _fields(type(first))
+        }
+    )
 
 
 def stepwise(env, traj) -> tuple:
