@@ -44,6 +44,26 @@ def stops_held() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
+@contextlib.contextmanager
+def deferred() -> Iterator[None]:
+    """While active (a periodic checkpoint being written, a GL call), SIGINT and SIGTERM wait: the first is raised
+    again, with the handlers of before, once the block is done, so that no stop cuts a file short mid-write or comes
+    out of a C library's callback as another error. Python runs handlers in the main thread: elsewhere, nothing
+    waits."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    held = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s in STOPS}
+    try:
+        yield
+    finally:
+        for s, handler in held.items():
+            signal.signal(s, handler)
+        if caught:
+            signal.raise_signal(caught[0])
+
+
 def start(process) -> None:
     """Start a multiprocessing Process with stops held during its fork."""
     with stops_held():

@@ -154,10 +154,10 @@ class FastEnv(gym.Env):
 
     def render_views(self, outside: bool = True) -> dict[str, np.ndarray]:
         """Endoscope image and, if asked, an outside view with the shell hidden."""
-        from .render import render_views
+        from .render import new_renderer, render_views
 
         if self._renderer is None:
-            self._renderer = mujoco.Renderer(self.model, self.height, self.width)
+            self._renderer = new_renderer(self.model, self.height, self.width)
         return render_views(self._renderer, self.model, self.data, self.task, outside)
 
     def hold_here(self) -> None:

@@ -12,6 +12,7 @@ from ..model.compiler import CompiledTask
 from ..spec.images import DEPTH_MM_PER_LEVEL, SEGMENTATION_CLASSES, SEGMENTATION_STEP, Image
 from .lean_scene import LeanScene
 from .looks import RandomLooks
+from .render import gl_render, new_renderer
 
 _OPTION = mujoco.MjvOption()
 _OPTION.geomgroup[3] = 0  # the scope's internal masses around the camera
@@ -54,7 +55,7 @@ def renderer(model: mujoco.MjModel, image: Image, key: tuple | None) -> mujoco.R
     """An offscreen renderer for the image's size and kind; one per key in a process (None: a new one)."""
     if key in _SHARED:
         return _SHARED[key]
-    r = mujoco.Renderer(model, image.size, image.size)
+    r = new_renderer(model, image.size, image.size)
     if image.kind == "depth":
         r.enable_depth_rendering()
     elif image.kind == "segmentation":
@@ -97,7 +98,7 @@ class EndoscopeFrames:
             mujoco.mjv_updateScene(m, data, _OPTION, None, self.view, _ALL, self.renderer.scene)
         finally:
             m.geom_rgba[hidden, 3] = alpha
-        return self.renderer.render()
+        return gl_render(self.renderer)
 
     def frame(self, data: mujoco.MjData, subtask: int) -> np.ndarray:
         """One frame (H, W, C) uint8 of the current state; `subtask` is the active avatar (segmentation)."""

@@ -19,9 +19,10 @@ from typer.testing import CliRunner
 from fastrl.agents.sb3 import checkpoint_problem
 from fastrl.atomic import DiskFull, atomic_write, write_json
 from fastrl.cli import app
+from fastrl.forked import deferred
 from fastrl.log.recording import recording_problem
 from fastrl.runner.runs.rundir import latest_checkpoint
-from fastrl.runner.runs.stops import deferred, stop_on_sigterm
+from fastrl.runner.runs.stops import stop_on_sigterm
 
 from ..conftest import spec_file
 

@@ -103,24 +103,6 @@ def shielded() -> Iterator[None]:
                 signal.signal(s, handler)
 
 
-@contextmanager
-def deferred() -> Iterator[None]:
-    """While active (a periodic checkpoint being written), SIGINT and SIGTERM wait: the first is raised again, with
-    the handlers of before, once the block is done, so that no stop cuts a file short mid-write."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught: list[int] = []
-    held = {s: signal.signal(s, lambda signum, frame: caught.append(signum)) for s in STOP_SIGNALS}
-    try:
-        yield
-    finally:
-        for s, handler in held.items():
-            signal.signal(s, handler)
-        if caught:
-            signal.raise_signal(caught[0])
-
-
 def tree_bytes(path: Path) -> int:
     """Total size of the files under a directory (0 if it does not exist)."""
     path = Path(path)

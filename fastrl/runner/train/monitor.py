@@ -18,7 +18,8 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 from ...agents.sb3 import save_checkpoint
 from ...atomic import append_line
-from ..runs.stops import check_space, deferred, tree_bytes
+from ...forked import deferred
+from ..runs.stops import check_space, tree_bytes
 
 
 class SessionRate(BaseCallback):
