@@ -109,7 +109,9 @@ def test_ctrl_c_with_workers_leaves_a_checkpoint_and_no_worker_behind(tmp_path):
         assert time.time() < deadline
         time.sleep(0.1)
     workers = psutil.Process(proc.pid).children()
-    assert len(workers) == 1  # one worker beside the main process on two or more CPUs
+    idle = [w for w in workers if os.sched_getscheduler(w.pid) == os.SCHED_IDLE]
+    assert len(workers) - len(idle) == 1  # one env worker beside the main process on two or more CPUs
+    assert len(idle) <= 1  # and the scripted expert's evaluation on the CPU time training leaves, till it is done
     os.killpg(proc.pid, signal.SIGINT)  # the main process and its worker alike
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130 and "Traceback" not in err, err

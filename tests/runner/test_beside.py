@@ -1,7 +1,10 @@
 """Work beside this process: a forked child's result, its errors, and the expert evaluated beside the agent."""
 
+import json
 import os
 import signal
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -15,6 +18,16 @@ from fastrl.spec import load_spec
 def test_result_comes_from_a_child_process():
     assert Beside(os.getpid).result() != os.getpid()
     assert Beside(os.getpid, fork=False).result() == os.getpid()
+
+
+def test_an_idle_child_yields_the_cpu_and_says_when_it_is_done():
+    job = Beside(lambda: os.sched_getscheduler(0), idle=True)
+    deadline = time.monotonic() + 30
+    while not job.done() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert job.done() and job.result() == os.SCHED_IDLE
+    assert Beside(lambda: os.sched_getscheduler(0)).result() == os.SCHED_OTHER
+    assert not Beside(os.getpid, fork=False).done()  # computed here, when result() asks
 
 
 def test_an_exception_in_the_child_is_raised_here():
@@ -39,10 +52,11 @@ def test_cancel_stops_the_child():
     assert not child.is_alive()
 
 
-def random_policy(spec, seed=0):
-    """Uniform discrete actions from a fixed generator (the same sequence for every call of this function)."""
-    rng, n = np.random.default_rng(seed), {"tracelines": 11, "triangulation": 19}[spec.name]
-    return lambda obs: int(rng.integers(0, n))
+def scattered_policy(spec):
+    """Discrete actions scattered over the action space, a pure function of the observation (as a trained
+    policy's most likely action is): the same in any process."""
+    n = {"tracelines": 11, "triangulation": 19}[spec.name]
+    return lambda obs: int(abs(float(np.asarray(obs, np.float64).sum())) * 1e4) % n
 
 
 @pytest.mark.parametrize("name", ["tracelines", "triangulation"])
@@ -50,7 +64,48 @@ def test_expert_beside_the_agent_scores_as_inline(name):
     overrides = ["evaluate.episodes=3", "evaluate.record_episodes=0"]
     inline = load_spec(f"specs/{name}.yaml", [*overrides, "train.workers=1"])
     forked = load_spec(f"specs/{name}.yaml", [*overrides, "train.workers=2"])
-    a = evaluate_run(inline, random_policy(inline), None, None)
-    b = evaluate_run(forked, random_policy(forked), None, None)
+    a = evaluate_run(inline, scattered_policy(inline), None, None)
+    b = evaluate_run(forked, scattered_policy(forked), None, None)
     assert a["expert"] == b["expert"] and a["agent"] == b["agent"]
     assert a["expert"]["subtasks_completed"] == 1.0 > a["agent"]["subtasks_completed"]
+
+
+SPLIT_EVALUATION = """
+import json
+import numpy as np
+from fastrl.env.render import rendered_here
+from fastrl.runner.train.evaluation import evaluate_run
+from fastrl.spec import load_spec
+
+class Logged:
+    def __init__(self):
+        self.episodes = {}
+    def log_episode(self, i, ep, *rest):
+        self.episodes[i] = ep
+
+def policy(obs):
+    return int(abs(float(np.asarray(obs, np.float64).sum())) * 1e4) % 11
+
+runs = {}
+assert not rendered_here()  # so the later half of the episodes runs in a forked child, which renders its images
+for workers in (2, 1):
+    overrides = ["evaluate.episodes=4", "evaluate.record_episodes=3", "evaluate.expert=false"]
+    overrides.append(f"train.workers={workers}")
+    logged = Logged()
+    result = evaluate_run(load_spec("specs/tracelines.yaml", overrides), policy, logged, None)
+    runs[workers] = (result["agent"], logged.episodes)
+(split, a), (inline, b) = runs[2], runs[1]
+same = sorted(a) == sorted(b) == [0, 1, 2] and all(
+    np.array_equal(a[i].portal, b[i].portal) and sorted(a[i].images) == sorted(b[i].images)
+    and all(np.array_equal(a[i].images[k], b[i].images[k]) for k in a[i].images)
+    for i in a
+)
+print(json.dumps({"summaries": split == inline, "records": same, "images": len(a[2].images)}))
+"""
+
+
+def test_a_split_evaluation_gives_the_episodes_and_images_of_one_process():
+    res = subprocess.run([sys.executable, "-c", SPLIT_EVALUATION], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    out = json.loads(res.stdout.strip().splitlines()[-1])
+    assert out == {"summaries": True, "records": True, "images": out["images"]} and out["images"] > 5

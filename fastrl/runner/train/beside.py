@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from typing import Any
 
@@ -12,10 +13,15 @@ __all__ = ["Beside", "ChildFailed"]
 _FN: Callable[[], Any] | None = None  # the child's copy of the function it computes
 
 
-def _keep(fn: Callable[[], Any]) -> None:
-    """Child start: keep the inherited function (a lambda need not pickle)."""
+def _keep(fn: Callable[[], Any], idle: bool) -> None:
+    """Child start: keep the inherited function (a lambda need not pickle); if `idle`, yield the CPU to every
+    other process (the lowest priority)."""
     global _FN
     _FN = fn
+    if idle and hasattr(os, "SCHED_IDLE"):
+        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))  # runs only where no other process would
+    elif idle:
+        os.nice(19)
 
 
 def _compute() -> Any:
@@ -27,12 +33,13 @@ class Beside:
     """`fn()` computed in a forked child from now on; `result()` waits for it, `cancel()` stops it.
 
     The child ignores Ctrl-C (the parent decides), ends quietly on SIGTERM or a cancel, and exits as soon as this
-    process dies. Where this platform cannot fork, or `fork` is false, `fn()` runs here when `result()` asks."""
+    process dies. With `idle`, it runs only on CPU time no other process wants (on a busy machine it may wait long:
+    see `done`). Where this platform cannot fork, or `fork` is false, `fn()` runs here when `result()` asks."""
 
-    def __init__(self, fn: Callable[[], Any], *, fork: bool = True):
+    def __init__(self, fn: Callable[[], Any], *, fork: bool = True, idle: bool = False):
         self.fn, self.worker, self.child = fn, None, None
         if fork and can_fork():
-            self.worker = Worker(initializer=_keep, initargs=(fn,), orphan_exit=True)
+            self.worker = Worker(initializer=_keep, initargs=(fn, idle), orphan_exit=True)
             self.future = self.worker.submit(_compute)
             self.child = self.worker.process
 
@@ -44,6 +51,10 @@ class Beside:
             return outcome(self.future, getattr(self.fn, "__name__", "a result"))
         finally:
             self.cancel()
+
+    def done(self) -> bool:
+        """Whether the child has its result ready (False where `fn()` runs here)."""
+        return self.worker is not None and self.future.done()
 
     def cancel(self) -> None:
         """Stop the child if it still runs and release it (after this, `result()` computes here)."""

@@ -9,40 +9,98 @@ from rich.console import Console
 
 from ...agents.expert import ScriptedExpert
 from ...env.fast_env import FastEnv
+from ...env.render import rendered_here
+from ...forked import deferred
 from ...log import RunRecorder
 from ...spec import load_spec
 from ...spec.models import TaskSpec
 from ..runs.saved import load_policy
-from ..runs.stops import EvaluationInterrupted, signal_name, stop_on_sigterm
-from .beside import Beside
-from .evaluate import evaluate
+from ..runs.stops import EvaluationInterrupted, shielded, signal_name, stop_on_sigterm
+from .beside import Beside, ChildFailed
+from .evaluate import evaluate, summarize
 
 
-def evaluate_run(spec: TaskSpec, policy, recorder: RunRecorder | None, console: Console | None) -> dict:
-    """Evaluate a policy (and the scripted expert, if the spec asks) on the spec's evaluation seeds."""
+def evaluate_run(
+    spec: TaskSpec, policy, recorder: RunRecorder | None, console: Console | None, expert: Beside | None = None
+) -> dict:
+    """Evaluate a policy (and the scripted expert, if the spec asks) on the spec's evaluation seeds. `expert`: its
+    evaluation started earlier at the lowest priority (expert_beside), kept if done, else started afresh here. With a
+    second CPU (`train.workers` > 1), the later half of the agent's episodes runs beside this process: the
+    episodes are the same either way."""
     ev = spec.evaluate
-    seeds = [ev.seed + i for i in range(ev.episodes)]
-    env = FastEnv(spec, width=ev.image_size[0], height=ev.image_size[1])
-    task = env.task
+    seeds = evaluation_seeds(spec)
     t0 = time.perf_counter()
-
-    def log(i, ep):
-        if recorder is not None and i < ev.record_episodes:
-            recorder.log_episode(i, ep, task, spec.scope.fov_deg, ev.image_size)
-
-    # the scripted expert's episodes do not depend on the agent: with a second CPU they run beside it
-    expert = Beside(lambda: expert_summary(spec, seeds), fork=spec.train.workers > 1) if ev.expert else None
+    # a sampled evaluation's draws follow one another through its episodes, so they stay in one process; and a
+    # child forked after this process rendered would deadlock in Mesa's EGL as soon as it rendered itself
+    half = len(seeds) // 2 if spec.train.workers > 1 and not ev.sampled and not rendered_here() else len(seeds)
+    rest = lambda: agent_episodes(spec, policy, seeds[half:], ev.record_episodes - half)  # noqa: E731
+    jobs, env = [], None
     try:
-        agent, _ = evaluate(env, policy, seeds, ev.image_every, ev.record_episodes, on_episode=log)
-        out = {"agent": agent, "seeds": seeds}
+        with deferred():  # kept in `jobs` before a stop can land
+            if expert is not None and not expert.done():  # the idle child found no idle CPU: start afresh beside
+                expert.cancel()
+                expert = None
+            expert = expert or expert_beside(spec)
+            later = Beside(rest) if half < len(seeds) else None
+            jobs = [job for job in (expert, later) if job is not None]
+        env = evaluation_env(spec)
+
+        def log(i, ep):
+            if recorder is not None and i < ev.record_episodes:
+                recorder.log_episode(i, ep, env.task, spec.scope.fov_deg, ev.image_size)
+
+        episodes = evaluate(env, policy, seeds[:half], ev.image_every, ev.record_episodes, on_episode=log)[1]
+        for i, ep in enumerate(_child_or_here(later, rest) if later else [], start=half):
+            log(i, ep)
+            episodes.append(ep)
+        out = {"agent": summarize(episodes), "seeds": seeds}
         if expert is not None:
             out["expert"] = expert.result()
     finally:
-        if expert is not None:
-            expert.cancel()
-        env.close()
+        with shielded():  # a second Ctrl-C must not cut the cleanup of a first short
+            for job in jobs:
+                job.cancel()
+            if env is not None:
+                env.close()
     out["eval_seconds"] = time.perf_counter() - t0
     return out
+
+
+def evaluation_env(spec: TaskSpec) -> FastEnv:
+    """The env of the final evaluation, rendering the recording's endoscope images at their size."""
+    return FastEnv(spec, width=spec.evaluate.image_size[0], height=spec.evaluate.image_size[1])
+
+
+def agent_episodes(spec: TaskSpec, policy, seeds: list[int], record: int) -> list:
+    """The policy's evaluation episodes on `seeds`, the first `record` of them with their endoscope images."""
+    env = evaluation_env(spec)
+    try:
+        return evaluate(env, policy, seeds, spec.evaluate.image_every, max(0, record))[1]
+    finally:
+        env.close()
+
+
+def _child_or_here(job: Beside, fn):
+    """The child's result; fn() here if the child died (killed, out of memory)."""
+    try:
+        return job.result()
+    except ChildFailed:
+        return fn()
+
+
+def evaluation_seeds(spec: TaskSpec) -> list[int]:
+    """The seeds of the final evaluation's episodes."""
+    return [spec.evaluate.seed + i for i in range(spec.evaluate.episodes)]
+
+
+def expert_beside(spec: TaskSpec, *, idle: bool = False) -> Beside | None:
+    """The scripted expert's evaluation (if the spec asks for it) started beside this process where it has a second
+    CPU (`train.workers` > 1): its episodes do not depend on the agent. `idle`: at the lowest priority, on the CPU
+    time training leaves (a run starts it before training)."""
+    if not spec.evaluate.expert:
+        return None
+    seeds = evaluation_seeds(spec)
+    return Beside(lambda: expert_summary(spec, seeds), fork=spec.train.workers > 1, idle=idle)
 
 
 def expert_summary(spec: TaskSpec, seeds: list[int]) -> dict:

@@ -11,6 +11,7 @@ from rich.console import Console
 
 from ...agents.sb3 import load_checkpoint, policy_function, save_checkpoint
 from ...atomic import DiskFull, is_disk_full, write_json, write_text
+from ...forked import deferred
 from ...irl.export import save_networks
 from ...log import RunRecorder
 from ...log.recording import recording_problem, repair_recording
@@ -29,7 +30,8 @@ from ..runs.stops import (
     space_to_resume,
     stop_on_sigterm,
 )
-from .evaluation import evaluate_run
+from .beside import Beside
+from .evaluation import evaluate_run, expert_beside
 from .learner import build_learner
 from .monitoring import training_monitor
 from .warm import warm_start_run
@@ -133,8 +135,31 @@ def _train_and_evaluate(
     progress: bool,
     resuming: bool = False,
 ) -> Path:
-    """Train (from a checkpoint if given), save, evaluate agent and expert, write eval.json and the recording."""
+    """Train (from a checkpoint if given), save, evaluate agent and expert, write eval.json and the recording. The
+    expert's evaluation starts first, beside training at the lowest priority: on the CPU time training leaves."""
+    beside: list[Beside] = []  # the expert's evaluation once started: stopped whichever way the run ends
     try:
+        return _learn_and_evaluate(run, spec, task, ckpt, console, progress, resuming, beside)
+    finally:
+        with shielded():  # a second Ctrl-C must not cut the cleanup of a first short
+            for job in beside:
+                job.cancel()
+
+
+def _learn_and_evaluate(
+    run: Path,
+    spec: TaskSpec,
+    task: CompiledTask,
+    ckpt: Path | None,
+    console: Console,
+    progress: bool,
+    resuming: bool,
+    beside: list[Beside],
+) -> Path:
+    """_train_and_evaluate's stages; the expert's evaluation goes into `beside` as it starts."""
+    try:
+        with deferred():  # kept in `beside` before a stop can land
+            beside += [job for job in [expert_beside(spec, idle=True)] if job is not None]
         learner = build_learner(spec, run, console, progress)
         before = load_checkpoint(ckpt, learner.model, learner.venv, learner.parts) if ckpt else {}
         recorder = _open_recorder(run, spec, task, int(learner.model.num_timesteps) if resuming else None)
@@ -151,7 +176,7 @@ def _train_and_evaluate(
         whole = not rrd.exists() or recording_problem(rrd) is None
         raise RunOutOfSpace(run, full, space_to_resume(run), whole) from None
     try:
-        _stages(run, spec, learner, before, recorder, console, progress)
+        _stages(run, spec, learner, before, recorder, console, progress, beside[0] if beside else None)
     except DiskFull as full:
         raise _out_of_space(run, full, recorder) from None
     except KeyboardInterrupt as stop:  # between stages: saving final/ or the networks, evaluation's start
@@ -195,7 +220,7 @@ def _out_of_space(run: Path, full: DiskFull, recorder: RunRecorder) -> RunOutOfS
 
 
 def _stages(
-    run: Path, spec: TaskSpec, learner, before: dict, recorder: RunRecorder, console: Console, progress: bool
+    run: Path, spec: TaskSpec, learner, before: dict, recorder: RunRecorder, console: Console, progress: bool, expert
 ) -> None:
     """Train to the budget (checkpointing; Ctrl-C or SIGTERM saves one and stops), save, evaluate, write eval.json."""
     model, venv = learner.model, learner.venv
@@ -241,7 +266,8 @@ def _stages(
     )
     check_space(recorder.path, 0)  # the reserve, before episodes stream into the recording
     try:
-        results = evaluate_run(spec, policy_function(model, venv, spec.evaluate.sampling_seed), recorder, console)
+        policy = policy_function(model, venv, spec.evaluate.sampling_seed)
+        results = evaluate_run(spec, policy, recorder, console, expert)
     except KeyboardInterrupt as stop:
         with shielded():
             update_meta(run, status="trained, evaluation interrupted")
