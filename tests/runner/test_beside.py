@@ -26,7 +26,8 @@ def test_an_idle_child_yields_the_cpu_and_says_when_it_is_done():
     while not job.done() and time.monotonic() < deadline:
         time.sleep(0.01)
     assert job.done() and job.result() == os.SCHED_IDLE
-    assert Beside(lambda: os.sched_getscheduler(0)).result() == os.SCHED_OTHER
+    mine = os.sched_getscheduler(0)
+    assert Beside(lambda: os.sched_getscheduler(0)).result() == mine != os.SCHED_IDLE  # a plain child keeps this one's
     assert not Beside(os.getpid, fork=False).done()  # computed here, when result() asks
 
 
