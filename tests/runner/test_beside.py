@@ -6,6 +6,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -44,6 +45,15 @@ def test_a_killed_child_is_reported():
     os.kill(job.child.pid, signal.SIGKILL)
     with pytest.raises(ChildFailed):
         job.result()
+
+
+def test_a_large_result_comes_whole_and_leaves_no_file_behind():
+    job = Beside(lambda: np.arange(3_000_000, dtype=np.float64))  # 24 MB: through a file, not the pool's pipe
+    path = Path(job.path)
+    assert np.array_equal(job.result(), np.arange(3_000_000, dtype=np.float64)) and not path.exists()
+    stopped = Beside(lambda: time.sleep(30))
+    stopped.cancel()
+    assert not Path(stopped.path).exists()
 
 
 def test_cancel_stops_the_child():

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import os
+import pickle
+import tempfile
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from ...forked import ChildFailed, Worker, can_fork, outcome
@@ -24,9 +27,13 @@ def _keep(fn: Callable[[], Any], idle: bool) -> None:
         os.nice(19)
 
 
-def _compute() -> Any:
-    """The child's one job: fn(), its value or exception sent back to the parent."""
-    return _FN()
+def _compute(path: str) -> None:
+    """The child's one job: fn(), its value written to `path` (its exception sent back to the parent). Not sent
+    through the pool's pipe: a child killed halfway through a large message would leave the parent's reader
+    waiting for the rest forever (the parent holds the pipe's other end), and a stop could not end it."""
+    value = _FN()
+    with open(path, "wb") as f:
+        pickle.dump(value, f, protocol=pickle.HIGHEST_PROTOCOL)
 
 
 class Beside:
@@ -37,10 +44,12 @@ class Beside:
     see `done`). Where this platform cannot fork, or `fork` is false, `fn()` runs here when `result()` asks."""
 
     def __init__(self, fn: Callable[[], Any], *, fork: bool = True, idle: bool = False):
-        self.fn, self.worker, self.child = fn, None, None
+        self.fn, self.worker, self.child, self.path = fn, None, None, None
         if fork and can_fork():
+            handle, self.path = tempfile.mkstemp(prefix="fastrl-beside-", suffix=".pickle")  # this user's only
+            os.close(handle)
             self.worker = Worker(initializer=_keep, initargs=(fn, idle), orphan_exit=True)
-            self.future = self.worker.submit(_compute)
+            self.future = self.worker.submit(_compute, self.path)
             self.child = self.worker.process
 
     def result(self) -> Any:
@@ -48,7 +57,9 @@ class Beside:
         if self.worker is None:
             return self.fn()
         try:
-            return outcome(self.future, getattr(self.fn, "__name__", "a result"))
+            outcome(self.future, getattr(self.fn, "__name__", "a result"))
+            with open(self.path, "rb") as f:
+                return pickle.load(f)  # written by our child into a file only this user can write
         finally:
             self.cancel()
 
@@ -62,3 +73,4 @@ class Beside:
             return
         self.worker.kill()
         self.worker, self.child = None, None
+        Path(self.path).unlink(missing_ok=True)

@@ -32,7 +32,8 @@ def evaluate_run(
     t0 = time.perf_counter()
     # a sampled evaluation's draws follow one another through its episodes, so they stay in one process; and a
     # child forked after this process rendered would deadlock in Mesa's EGL as soon as it rendered itself
-    half = len(seeds) // 2 if spec.train.workers > 1 and not ev.sampled and not rendered_here() else len(seeds)
+    split = len(seeds) > 1 and spec.train.workers > 1 and not ev.sampled and not rendered_here()
+    half = len(seeds) // 2 if split else len(seeds)
     rest = lambda: agent_episodes(spec, policy, seeds[half:], ev.record_episodes - half)  # noqa: E731
     jobs, env = [], None
     try:
