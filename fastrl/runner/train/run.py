@@ -220,7 +220,14 @@ def _out_of_space(run: Path, full: DiskFull, recorder: RunRecorder) -> RunOutOfS
 
 
 def _stages(
-    run: Path, spec: TaskSpec, learner, before: dict, recorder: RunRecorder, console: Console, progress: bool, expert
+    run: Path,
+    spec: TaskSpec,
+    learner,
+    before: dict,
+    recorder: RunRecorder,
+    console: Console,
+    progress: bool,
+    expert: Beside | None,
 ) -> None:
     """Train to the budget (checkpointing; Ctrl-C or SIGTERM saves one and stops), save, evaluate, write eval.json."""
     model, venv = learner.model, learner.venv
