@@ -68,7 +68,9 @@ def open_regular(path, max_bytes: int) -> BinaryIO:
             raise ValueError(f"cannot read file: it is {kind}")
         if info.st_size > max_bytes:
             raise ValueError(f"file is too large: {info.st_size:,} bytes, at most {max_bytes:,} are read")
-        return os.fdopen(fd, "rb")
     except BaseException:
         os.close(fd)
         raise
+    # outside the try: once fdopen's file object holds the descriptor it closes it; closing it here too after a
+    # Ctrl-C inside fdopen would close it twice, the second time perhaps another file's that took its number
+    return os.fdopen(fd, "rb")
