@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from functools import partial
 from pathlib import Path
 
 from rich.console import Console
@@ -34,7 +35,7 @@ def evaluate_run(
     # child forked after this process rendered would deadlock in Mesa's EGL as soon as it rendered itself
     split = len(seeds) > 1 and spec.train.workers > 1 and not ev.sampled and not rendered_here()
     half = len(seeds) // 2 if split else len(seeds)
-    rest = lambda: agent_episodes(spec, policy, seeds[half:], ev.record_episodes - half)  # noqa: E731
+    rest = partial(agent_episodes, spec, policy, seeds[half:], ev.record_episodes - half)
     jobs, env = [], None
     try:
         with deferred():  # kept in `jobs` before a stop can land

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import time
+from contextlib import ExitStack
 from pathlib import Path
 
 import numpy as np
@@ -137,62 +138,51 @@ def _train_and_evaluate(
 ) -> Path:
     """Train (from a checkpoint if given), save, evaluate agent and expert, write eval.json and the recording. The
     expert's evaluation starts first, beside training at the lowest priority: on the CPU time training leaves."""
-    beside: list[Beside] = []  # the expert's evaluation once started: stopped whichever way the run ends
-    try:
-        return _learn_and_evaluate(run, spec, task, ckpt, console, progress, resuming, beside)
-    finally:
-        with shielded():  # a second Ctrl-C must not cut the cleanup of a first short
-            for job in beside:
-                job.cancel()
-
-
-def _learn_and_evaluate(
-    run: Path,
-    spec: TaskSpec,
-    task: CompiledTask,
-    ckpt: Path | None,
-    console: Console,
-    progress: bool,
-    resuming: bool,
-    beside: list[Beside],
-) -> Path:
-    """_train_and_evaluate's stages; the expert's evaluation goes into `beside` as it starts."""
-    try:
-        with deferred():  # kept in `beside` before a stop can land
-            beside += [job for job in [expert_beside(spec, idle=True)] if job is not None]
-        learner = build_learner(spec, run, console, progress)
-        before = load_checkpoint(ckpt, learner.model, learner.venv, learner.parts) if ckpt else {}
-        recorder = _open_recorder(run, spec, task, int(learner.model.num_timesteps) if resuming else None)
-    except KeyboardInterrupt as stop:  # before training: writing demonstrations, repairing the old recording
-        with shielded():
-            update_meta(run, status="interrupted")
-        done = read_state(ckpt)["timesteps"] if ckpt else 0
-        raise RunInterrupted(run, done, signal_name(stop)) from None
-    except OSError as e:
-        if not is_disk_full(e):
+    with ExitStack() as jobs:  # the expert's evaluation, once started, is stopped whichever way the run ends
+        try:
+            with deferred():  # its cancel registered before a stop can land
+                expert = expert_beside(spec, idle=True)
+                if expert is not None:
+                    jobs.callback(_cancel, expert)
+            learner = build_learner(spec, run, console, progress)
+            before = load_checkpoint(ckpt, learner.model, learner.venv, learner.parts) if ckpt else {}
+            recorder = _open_recorder(run, spec, task, int(learner.model.num_timesteps) if resuming else None)
+        except KeyboardInterrupt as stop:  # before training: writing demonstrations, repairing the old recording
+            with shielded():
+                update_meta(run, status="interrupted")
+            done = read_state(ckpt)["timesteps"] if ckpt else 0
+            raise RunInterrupted(run, done, signal_name(stop)) from None
+        except OSError as e:
+            if not is_disk_full(e):
+                raise
+            full = e if isinstance(e, DiskFull) else DiskFull(Path(e.filename or run))
+            rrd = run / "recording.rrd"
+            whole = not rrd.exists() or recording_problem(rrd) is None
+            raise RunOutOfSpace(run, full, space_to_resume(run), whole) from None
+        try:
+            _stages(run, spec, learner, before, recorder, console, progress, expert)
+        except DiskFull as full:
+            raise _out_of_space(run, full, recorder) from None
+        except KeyboardInterrupt as stop:  # between stages: saving final/ or the networks, evaluation's start
+            _close(run, recorder)
+            with shielded():
+                update_meta(run, status="interrupted")
+            ckpt = latest_checkpoint(run)
+            done = read_state(ckpt)["timesteps"] if ckpt else 0
+            raise RunInterrupted(run, done, signal_name(stop)) from None
+        except BaseException:
+            _close(run, recorder)
             raise
-        full = e if isinstance(e, DiskFull) else DiskFull(Path(e.filename or run))
-        rrd = run / "recording.rrd"
-        whole = not rrd.exists() or recording_problem(rrd) is None
-        raise RunOutOfSpace(run, full, space_to_resume(run), whole) from None
-    try:
-        _stages(run, spec, learner, before, recorder, console, progress, beside[0] if beside else None)
-    except DiskFull as full:
-        raise _out_of_space(run, full, recorder) from None
-    except KeyboardInterrupt as stop:  # between stages: saving final/ or the networks, evaluation's start
+        finally:
+            learner.venv.close()  # its worker processes, if any
         _close(run, recorder)
-        with shielded():
-            update_meta(run, status="interrupted")
-        ckpt = latest_checkpoint(run)
-        done = read_state(ckpt)["timesteps"] if ckpt else 0
-        raise RunInterrupted(run, done, signal_name(stop)) from None
-    except BaseException:
-        _close(run, recorder)
-        raise
-    finally:
-        learner.venv.close()  # its worker processes, if any
-    _close(run, recorder)
-    return run
+        return run
+
+
+def _cancel(job: Beside) -> None:
+    """Stop a child's work; a second Ctrl-C must not cut the cleanup of a first short."""
+    with shielded():
+        job.cancel()
 
 
 def _close(run: Path, recorder: RunRecorder) -> None:
