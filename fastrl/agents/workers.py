@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import signal
+import time
 from collections.abc import Callable
 
 import gymnasium as gym
@@ -29,6 +30,16 @@ class FreshInfoVecEnv(DummyVecEnv):
         return self._obs_from_buf(), np.copy(self.buf_rews), np.copy(self.buf_dones), list(self.buf_infos)
 
 
+def recv_soon(conn, spin: float = 0.002):
+    """The next message, polled for up to `spin` seconds before blocking: a process asleep in a read took 0.09 ms
+    (median; 0.19 at p90) to wake up on a 2-core VM, a tenth of a 16-env batch's step. Rollout steps come 0.6 ms
+    apart, so a worker stays awake through a rollout and sleeps through a PPO update."""
+    deadline = time.perf_counter() + spin
+    while not conn.poll() and time.perf_counter() < deadline:
+        pass
+    return conn.recv()
+
+
 def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int) -> None:
     """A worker's loop: step, reset and query its batch of envs on the parent's commands until told to stop.
 
@@ -41,7 +52,7 @@ def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int) -> 
     venv = FreshInfoVecEnv([make_env for _ in range(n)])
     try:
         while True:
-            command, arg = conn.recv()
+            command, arg = recv_soon(conn)
             if command == "step":
                 venv.step_async(arg)
                 conn.send(venv.step_wait())
@@ -116,7 +127,7 @@ class SplitVecEnv(VecEnv):
     def step_wait(self):
         """Step this process's batch, then gather the workers' results."""
         results = [self.local.step_wait()]
-        results += [pipe.recv() for pipe in self.pipes]
+        results += [recv_soon(pipe) for pipe in self.pipes]
         self.waiting = False
         obs, rews, dones, infos = zip(*results)
         return np.concatenate(obs), np.concatenate(rews), np.concatenate(dones), [i for part in infos for i in part]

@@ -1,10 +1,12 @@
 """Envs split across worker processes: the same trajectories and weights as in one process, clean stops."""
 
 import json
+import multiprocessing as mp
 import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -12,7 +14,7 @@ import psutil
 import torch
 
 from fastrl.agents.sb3 import batch_policy, build_model, make_vec_env
-from fastrl.agents.workers import FreshInfoVecEnv, SplitVecEnv
+from fastrl.agents.workers import FreshInfoVecEnv, SplitVecEnv, recv_soon
 from fastrl.env.fast_env import FastEnv
 from fastrl.runner.train.evaluate import evaluate, evaluate_batched
 from fastrl.spec import load_spec
@@ -121,3 +123,12 @@ def test_ctrl_c_with_workers_leaves_a_checkpoint_and_no_worker_behind(tmp_path):
     assert meta["status"] == "interrupted" and saved["timesteps"] == meta["trained_timesteps"] > 0
     psutil.wait_procs(workers, timeout=10)
     assert not any(w.is_running() and w.status() != psutil.STATUS_ZOMBIE for w in workers)
+
+
+def test_recv_soon_waits_past_its_spin_for_a_late_message():
+    a, b = mp.Pipe()
+    threading.Timer(0.05, lambda: b.send(("step", 7))).start()
+    t0 = time.perf_counter()
+    assert recv_soon(a, spin=0.002) == ("step", 7) and time.perf_counter() - t0 >= 0.045
+    b.send("ready")
+    assert recv_soon(a) == "ready"
