@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import torch
-from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.torch_layers import MlpExtractor
 from torch import nn
+
+from .lean_policy import LeanActorCriticPolicy
 
 
 class ColumnSelect(nn.Linear):
@@ -24,8 +25,8 @@ class ColumnSelect(nn.Linear):
             self.weight[torch.arange(len(self.columns)), torch.tensor(self.columns)] = 1.0
 
 
-class ColumnCriticPolicy(ActorCriticPolicy):
-    """ActorCriticPolicy whose value MLP reads `critic_columns` of the (normalised, flat) observation."""
+class ColumnCriticPolicy(LeanActorCriticPolicy):
+    """LeanActorCriticPolicy whose value MLP reads `critic_columns` of the (normalised, flat) observation."""
 
     def __init__(self, *args, critic_columns: list[int], **kwargs):
         self.critic_columns = list(critic_columns)

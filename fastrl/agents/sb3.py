@@ -22,6 +22,7 @@ from ..spec.training import Encoder
 from .checkpoint_files import checkpoint_problem, file_sha256
 from .critic_columns import ColumnCriticPolicy
 from .encoder import PixelEncoder
+from .lean_policy import LeanActorCriticPolicy
 from .lean_sac import LeanSAC
 from .workers import FreshInfoVecEnv, SplitVecEnv
 
@@ -66,7 +67,8 @@ def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) 
     # the checks of every distribution's arguments took 30% of each rollout's policy call (528 -> 370 us for 32
     # observations) and PPO's updates pay them too; they change no number, the policy's outputs are finite
     torch.distributions.Distribution.set_default_validate_args(False)
-    policy, policy_kwargs = "MlpPolicy", {"net_arch": arch, "activation_fn": act}
+    policy = LeanActorCriticPolicy if kind.name == "PPO" else "MlpPolicy"
+    policy_kwargs = {"net_arch": arch, "activation_fn": act}
     critic_columns = value_inputs(spec)
     if critic_columns is not None and kind.name == "PPO":
         policy, policy_kwargs["critic_columns"] = ColumnCriticPolicy, critic_columns

@@ -47,7 +47,7 @@ def test_the_critic_ignores_its_columns_the_actor_does_not_and_the_export_agrees
     np.testing.assert_allclose(load_networks(tmp_path).value(raw), v.squeeze(-1).numpy(), atol=1e-5)
 
 
-def test_without_value_ignore_the_generator_keeps_sb3s_policy():
+def test_without_value_ignore_the_generator_keeps_the_full_width_critic():
     spec = load_spec(spec_file("tracelines"), TINY[:-1])
     model = build_model(spec, make_vec_env(spec, 2, 0))
-    assert value_inputs(spec) is None and type(model.policy).__name__ == "ActorCriticPolicy"
+    assert value_inputs(spec) is None and type(model.policy).__name__ == "LeanActorCriticPolicy"
