@@ -8,12 +8,14 @@ import os
 import signal
 import threading
 import time
+import weakref
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 
 STOPS = {signal.SIGINT, signal.SIGTERM}
 WATCH_SECONDS = 0.5  # how often a child that must not outlive its parent looks for it
+_IDLE_WORKERS: weakref.WeakSet = weakref.WeakSet()  # this process's workers at the lowest priority
 
 
 class ChildFailed(RuntimeError):
@@ -92,9 +94,25 @@ def _watch(parent: int) -> None:
     os._exit(0)
 
 
-def _begin(parent: int, term, orphan_exit: bool, initializer: Callable | None, initargs: tuple) -> None:
-    """A worker's start: the child's signals, its watch on the parent if asked, then the caller's initializer."""
+def lowest_priority() -> None:
+    """This process runs only on CPU time no other process wants (Linux's SCHED_IDLE; elsewhere nice 19)."""
+    if hasattr(os, "SCHED_IDLE"):
+        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
+    else:
+        os.nice(19)
+
+
+def idle_work_running() -> bool:
+    """Whether a worker of this process at the lowest priority is computing: CPU time left unused is its."""
+    return any(w.computing() for w in list(_IDLE_WORKERS))
+
+
+def _begin(parent: int, term, orphan_exit: bool, idle: bool, initializer: Callable | None, initargs: tuple) -> None:
+    """A worker's start: the child's signals and priority, its watch on the parent if asked, then the caller's
+    initializer."""
     child_signals(term=term)
+    if idle:
+        lowest_priority()
     if orphan_exit:
         threading.Thread(target=_watch, args=(parent,), daemon=True, name="fastrl-watch").start()
     if initializer is not None:
@@ -105,7 +123,8 @@ class Worker:
     """One forked worker process behind a ProcessPoolExecutor: `submit` work, `kill` it, or `shutdown` when done.
 
     `initializer(*initargs)` runs in the child first and is inherited, not pickled: it may hand over lambdas, a
-    scorer with its networks, a shared counter. With `orphan_exit`, the child exits as soon as this process dies."""
+    scorer with its networks, a shared counter. With `orphan_exit`, the child exits as soon as this process dies;
+    with `idle`, it runs at the lowest priority (on the CPU time this process and the others leave)."""
 
     def __init__(
         self,
@@ -114,23 +133,32 @@ class Worker:
         initargs: tuple = (),
         term=signal.SIG_DFL,
         orphan_exit: bool = False,
+        idle: bool = False,
     ):
         self.pool = ProcessPoolExecutor(
             1,
             mp_context=context(),
             initializer=_begin,
-            initargs=(os.getpid(), term, orphan_exit, initializer, initargs),
+            initargs=(os.getpid(), term, orphan_exit, idle, initializer, initargs),
         )
-        self.process = None
+        self.process, self.futures = None, []
+        if idle:
+            _IDLE_WORKERS.add(self)
 
     def submit(self, fn: Callable, *args) -> Future:
         """Run a picklable function in the worker; the first call forks it, stops held."""
         if self.process is not None:
-            return self.pool.submit(fn, *args)
-        with stops_held():
             future = self.pool.submit(fn, *args)
-            (self.process,) = self.pool._processes.values()  # forked by the first submit (fork: all at once)
+        else:
+            with stops_held():
+                future = self.pool.submit(fn, *args)
+                (self.process,) = self.pool._processes.values()  # forked by the first submit (fork: all at once)
+        self.futures = [*(f for f in self.futures if not f.done()), future]
         return future
+
+    def computing(self) -> bool:
+        """Whether work submitted to the worker is still pending or running."""
+        return self.process is not None and any(not f.done() for f in self.futures)
 
     def kill(self) -> None:
         """Kill the worker if it still runs, wait for it, and cancel what was pending."""
@@ -139,6 +167,7 @@ class Worker:
         if self.process is not None:
             self.process.join()
         self.pool.shutdown(wait=True, cancel_futures=True)
+        self.futures = []
 
     def shutdown(self) -> None:
         """Let the worker finish what it runs, cancel what is pending, and wait for it to exit."""

@@ -11,6 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fastrl.agents.sb3 import make_vec_env
+from fastrl.agents.workers import SPIN
+from fastrl.forked import idle_work_running
 from fastrl.runner.train.beside import Beside, ChildFailed
 from fastrl.runner.train.evaluation import evaluate_run
 from fastrl.spec import load_spec
@@ -30,6 +33,25 @@ def test_an_idle_child_yields_the_cpu_and_says_when_it_is_done():
     mine = os.sched_getscheduler(0)
     assert Beside(lambda: os.sched_getscheduler(0)).result() == mine != os.SCHED_IDLE  # a plain child keeps this one's
     assert not Beside(os.getpid, fork=False).done()  # computed here, when result() asks
+
+
+def test_env_workers_leave_the_cpu_they_would_poll_away_to_idle_work_beside():
+    spec = load_spec("tracelines")
+    busy = Beside(lambda: time.sleep(5))  # at the usual priority: not counted
+    quick = Beside(lambda: 1, idle=True)
+    assert quick.result() == 1 and not idle_work_running()  # done: its CPU time is no longer wanted
+    job = Beside(lambda: time.sleep(5), idle=True)
+    assert idle_work_running()
+    venvs = [make_vec_env(spec, 2, 0, workers=2)]
+    job.cancel()
+    assert not idle_work_running()
+    venvs.append(make_vec_env(spec, 2, 0, workers=2))
+    busy.cancel()
+    try:
+        assert [v.venv.spin for v in venvs] == [0.0, SPIN] and SPIN > 0
+    finally:
+        for v in venvs:
+            v.close()
 
 
 def test_an_exception_in_the_child_is_raised_here():

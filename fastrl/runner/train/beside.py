@@ -16,15 +16,10 @@ __all__ = ["Beside", "ChildFailed"]
 _FN: Callable[[], Any] | None = None  # the child's copy of the function it computes
 
 
-def _keep(fn: Callable[[], Any], idle: bool) -> None:
-    """Child start: keep the inherited function (a lambda need not pickle); if `idle`, yield the CPU to every
-    other process (the lowest priority)."""
+def _keep(fn: Callable[[], Any]) -> None:
+    """Child start: keep the inherited function (a lambda need not pickle)."""
     global _FN
     _FN = fn
-    if idle and hasattr(os, "SCHED_IDLE"):
-        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))  # runs only where no other process would
-    elif idle:
-        os.nice(19)
 
 
 def _compute(path: str) -> None:
@@ -48,7 +43,7 @@ class Beside:
         if fork and can_fork():
             handle, self.path = tempfile.mkstemp(prefix="fastrl-beside-", suffix=".pickle")  # this user's only
             os.close(handle)
-            self.worker = Worker(initializer=_keep, initargs=(fn, idle), orphan_exit=True)
+            self.worker = Worker(initializer=_keep, initargs=(fn,), orphan_exit=True, idle=idle)
             self.future = self.worker.submit(_compute, self.path)
             self.child = self.worker.process
 
