@@ -7,6 +7,8 @@ import torch
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 
+from .eager_adam import EagerAdam
+
 
 def normalize_from_data(venv: VecEnv, observations: np.ndarray) -> None:
     """Set the observation normalisation to the demonstrations' mean and variance (if the venv has one)."""
@@ -33,7 +35,7 @@ def behaviour_clone(
     policy = model.policy
     obs_t, _ = policy.obs_to_tensor(x)  # frames channels first, as the policy takes them (it scales them to floats)
     act_t = torch.as_tensor(actions)
-    optim = torch.optim.Adam(policy.parameters(), lr=lr)
+    optim = EagerAdam(policy.parameters(), lr=lr)
     rng = np.random.default_rng(seed)
     losses = []
     policy.set_training_mode(True)

@@ -21,6 +21,7 @@ from ..spec.models import TaskSpec
 from ..spec.training import Encoder
 from .checkpoint_files import checkpoint_problem, file_sha256
 from .critic_columns import ColumnCriticPolicy
+from .eager_adam import EagerAdam
 from .encoder import PixelEncoder
 from .lean_policy import LeanActorCriticPolicy
 from .lean_sac import LeanSAC
@@ -69,6 +70,8 @@ def build_model(spec: TaskSpec, venv: VecEnv, seed: int | None = None, **extra) 
     torch.distributions.Distribution.set_default_validate_args(False)
     policy = LeanActorCriticPolicy if kind.name == "PPO" else "MlpPolicy"
     policy_kwargs = {"net_arch": arch, "activation_fn": act}
+    if kind.name == "PPO":  # SB3's Adam with its eps for PPO, without the compiler's import
+        policy_kwargs |= {"optimizer_class": EagerAdam, "optimizer_kwargs": {"eps": 1e-5}}
     critic_columns = value_inputs(spec)
     if critic_columns is not None and kind.name == "PPO":
         policy, policy_kwargs["critic_columns"] = ColumnCriticPolicy, critic_columns

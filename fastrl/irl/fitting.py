@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
+from ..agents.eager_adam import EagerAdam
 from .discriminator import Discriminator, absorbing_states, augment
 
 
@@ -101,7 +102,7 @@ class DiscriminatorFit:
     ):
         self.disc, self.batch_size, self.gradient_penalty = disc, batch_size, gradient_penalty
         self.ranking: Callable[[], torch.Tensor] | None = None  # a weighted ranking loss added to each step
-        self.optim = torch.optim.Adam(disc.parameters(), lr=lr)
+        self.optim = EagerAdam(disc.parameters(), lr=lr)
         self.rng = np.random.default_rng(seed)
 
     def epochs(self, policy: Batch, expert: Batch, epochs: int) -> dict[str, float]:
