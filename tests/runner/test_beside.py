@@ -142,3 +142,26 @@ def test_a_split_evaluation_gives_the_episodes_and_images_of_one_process():
     assert res.returncode == 0, res.stderr
     out = json.loads(res.stdout.strip().splitlines()[-1])
     assert out == {"summaries": True, "records": True, "images": out["images"]} and out["images"] > 5
+
+
+def test_the_periodic_evaluation_splits_across_two_processes_with_the_same_figures(monkeypatch):
+    from fastrl.agents.sb3 import build_model
+    from fastrl.runner.train import monitoring
+
+    started = []
+
+    class Counted(Beside):
+        def __init__(self, fn, **kwargs):
+            started.append(os.getpid())
+            super().__init__(fn, **kwargs)
+
+    monkeypatch.setattr(monitoring, "Beside", Counted)
+    figures = {}
+    for workers in (1, 2):
+        spec = load_spec("tracelines", [f"train.workers={workers}", "evaluate.periodic_episodes=5"])
+        venv = make_vec_env(spec, 2, 0)
+        model = build_model(spec, venv, seed=3)
+        figures[workers] = monitoring.periodic_evaluator(spec, model, venv)()
+        venv.close()
+    assert started == [os.getpid()]  # one child, for workers=2
+    assert figures[1] == figures[2] and 0 < figures[1]["eval/episode_time"] <= 30

@@ -11,7 +11,7 @@ from typing import Any
 
 from ...forked import ChildFailed, Worker, can_fork, outcome
 
-__all__ = ["Beside", "ChildFailed"]
+__all__ = ["Beside", "ChildFailed", "child_or_here"]
 
 _FN: Callable[[], Any] | None = None  # the child's copy of the function it computes
 
@@ -69,3 +69,11 @@ class Beside:
         self.worker.kill()
         self.worker, self.child = None, None
         Path(self.path).unlink(missing_ok=True)
+
+
+def child_or_here(job: Beside, fn: Callable[[], Any]) -> Any:
+    """The child's result; fn() here if the child died (killed, out of memory)."""
+    try:
+        return job.result()
+    except ChildFailed:
+        return fn()

@@ -68,29 +68,38 @@ def evaluate_batched(envs: list, act: Callable[[np.ndarray], np.ndarray], seeds:
     The cheap evaluation during training: subtask share, success, return and episode time, no records.
     `act` maps a batch of observations to a batch of actions; `envs` needs at least as many envs as seeds.
     """
+    return batched_summary(batched_episodes(envs, act, seeds))
+
+
+def batched_episodes(envs: list, act: Callable[[np.ndarray], np.ndarray], seeds: list[int]) -> np.ndarray:
+    """evaluate_batched's episodes: (return, subtask share, success, time) per seed, in the seeds' order."""
     live = list(range(len(seeds)))
     obs = stack_observations([envs[i].reset(seed=s)[0] for i, s in enumerate(seeds)])
-    returns, subtasks, success, times = np.zeros(len(seeds)), np.zeros(len(seeds)), np.zeros(len(seeds)), {}
+    out = np.zeros((len(seeds), 4))
     while live:
         actions = act({k: v[live] for k, v in obs.items()} if isinstance(obs, dict) else obs[live])
         still = []
         for i, action in zip(live, actions):
             o, reward, term, trunc, info = envs[i].step(action)
-            returns[i] += reward
+            out[i, 0] += reward
             for part, value in obs.items() if isinstance(obs, dict) else [(None, obs)]:
                 value[i] = o if part is None else o[part]
             if term or trunc:
-                subtasks[i] = info["subtask"] / max(1, info["subtasks_total"])
-                success[i] = float(info["success"])
-                times[i] = info["time"]
+                out[i, 1:] = info["subtask"] / max(1, info["subtasks_total"]), float(info["success"]), info["time"]
             else:
                 still.append(i)
         live = still
+    return out
+
+
+def batched_summary(episodes: np.ndarray) -> dict:
+    """The figures of batched_episodes' rows."""
+    returns, subtasks, success, times = episodes.T
     return {
         "success_rate": float(success.mean()),
         "subtasks_completed": float(subtasks.mean()),
         "return_mean": float(returns.mean()),
-        "episode_time_mean": float(np.mean(list(times.values()))),
+        "episode_time_mean": float(times.mean()),
     }
 
 

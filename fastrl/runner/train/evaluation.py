@@ -17,7 +17,7 @@ from ...spec import load_spec
 from ...spec.models import TaskSpec
 from ..runs.saved import load_policy
 from ..runs.stops import EvaluationInterrupted, shielded, signal_name, stop_on_sigterm
-from .beside import Beside, ChildFailed
+from .beside import Beside, child_or_here
 from .evaluate import evaluate, summarize
 
 
@@ -52,7 +52,7 @@ def evaluate_run(
                 recorder.log_episode(i, ep, env.task, spec.scope.fov_deg, ev.image_size)
 
         episodes = evaluate(env, policy, seeds[:half], ev.image_every, ev.record_episodes, on_episode=log)[1]
-        for i, ep in enumerate(_child_or_here(later, rest) if later else [], start=half):
+        for i, ep in enumerate(child_or_here(later, rest) if later else [], start=half):
             log(i, ep)
             episodes.append(ep)
         out = {"agent": summarize(episodes), "seeds": seeds}
@@ -80,14 +80,6 @@ def agent_episodes(spec: TaskSpec, policy, seeds: list[int], record: int) -> lis
         return evaluate(env, policy, seeds, spec.evaluate.image_every, max(0, record))[1]
     finally:
         env.close()
-
-
-def _child_or_here(job: Beside, fn):
-    """The child's result; fn() here if the child died (killed, out of memory)."""
-    try:
-        return job.result()
-    except ChildFailed:
-        return fn()
 
 
 def evaluation_seeds(spec: TaskSpec) -> list[int]:

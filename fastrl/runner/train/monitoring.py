@@ -2,14 +2,21 @@
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
+
+import numpy as np
 
 from ...agents.sb3 import batch_policy
 from ...env.fast_env import FastEnv
+from ...env.render import rendered_here
+from ...forked import deferred
 from ...log import RunRecorder
 from ...spec.irl import min_steps
 from ...spec.models import TaskSpec
-from .evaluate import evaluate_batched
+from ..runs.stops import shielded
+from .beside import Beside, child_or_here
+from .evaluate import batched_episodes, batched_summary
 from .monitor import (
     Checkpoints,
     CurvePoints,
@@ -64,14 +71,31 @@ def periodic_evaluator(spec: TaskSpec, model, venv):
     """Evaluation of the current policy on the first evaluation seeds (its sampled actions if the spec says so), as
     curve points.
 
-    The episodes run side by side, one policy call for all of them per step."""
+    The episodes run side by side, one policy call for all of them per step; with a second CPU (`train.workers` >
+    1) the later half of them in a forked child meanwhile (the env workers wait: the same figures either way)."""
     if not periodic_every(spec):
         return None
     seeds = [spec.evaluate.seed + i for i in range(spec.evaluate.periodic_episodes)]
     envs = [FastEnv(spec) for _ in seeds]
 
     def run_evaluation() -> dict[str, float]:
-        summary = evaluate_batched(envs, batch_policy(model, venv, spec.evaluate.sampling_seed), seeds)
+        act = batch_policy(model, venv, spec.evaluate.sampling_seed)
+        # sampled actions draw in turn through all episodes; a child forked after this process rendered (image
+        # observations) would deadlock in Mesa's EGL
+        split = len(seeds) > 1 and spec.train.workers > 1 and not spec.evaluate.sampled and not rendered_here()
+        half = len(seeds) // 2 if split else len(seeds)
+        rest = partial(batched_episodes, envs[half:], act, seeds[half:])
+        later = None
+        try:
+            with deferred():  # cancelled below even if a stop lands as it starts
+                later = Beside(rest) if split else None
+            mine = batched_episodes(envs[:half], act, seeds[:half])
+            theirs = child_or_here(later, rest) if later is not None else np.zeros((0, 4))
+        finally:
+            if later is not None:
+                with shielded():
+                    later.cancel()
+        summary = batched_summary(np.concatenate([mine, theirs]))
         return {
             "eval/success_rate": summary["success_rate"],
             "eval/subtasks": summary["subtasks_completed"],
