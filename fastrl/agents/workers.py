@@ -88,8 +88,8 @@ class SplitVecEnv(VecEnv):
     Env i behaves as env i of a FreshInfoVecEnv of the same envs (same seeds, same order of results), so the
     split changes the speed, never the trajectories. Workers are forked daemons that ignore Ctrl-C and SIGTERM
     and exit when the pipe to this process closes. The processes poll for each other's messages before they sleep
-    (`recv_soon`), unless work at the lowest priority runs beside them: the CPU time they would poll away is its
-    (`fastrl run`'s scripted expert: 2.5 s later to the final evaluation against 0.7 s sooner out of training).
+    (`recv_soon`), unless they start while work at the lowest priority runs beside them: the CPU time they would
+    poll away is its (`fastrl run`'s scripted expert: 2.5 s later to the final evaluation, 0.7 s sooner training).
     """
 
     def __init__(self, *, make_env: Callable[[], gym.Env], n_envs: int, processes: int, fork: bool = True):
