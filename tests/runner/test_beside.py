@@ -158,12 +158,13 @@ def test_the_periodic_evaluation_splits_across_two_processes_with_the_same_figur
     monkeypatch.setattr(monitoring, "Beside", Counted)
     monkeypatch.setattr(monitoring, "rendered_here", lambda: False)  # an earlier test in this process may have
     # rendered; these episodes render nothing, so the child may fork
-    figures = {}
-    for workers in (1, 2):
+    figures = []
+    for workers, idle_beside in ((1, False), (2, False), (2, True)):
+        monkeypatch.setattr(monitoring, "idle_work_running", lambda idle=idle_beside: idle)
         spec = load_spec("tracelines", [f"train.workers={workers}", "evaluate.periodic_episodes=5"])
         venv = make_vec_env(spec, 2, 0)
         model = build_model(spec, venv, seed=3)
-        figures[workers] = monitoring.periodic_evaluator(spec, model, venv)()
+        figures.append(monitoring.periodic_evaluator(spec, model, venv)())
         venv.close()
-    assert started == [os.getpid()]  # one child, for workers=2
-    assert figures[1] == figures[2] and 0 < figures[1]["eval/episode_time"] <= 30
+    assert started == [os.getpid()]  # one child: two processes, nothing at the lowest priority beside them
+    assert figures[0] == figures[1] == figures[2] and 0 < figures[0]["eval/episode_time"] <= 30

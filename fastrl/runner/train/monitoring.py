@@ -10,7 +10,7 @@ import numpy as np
 from ...agents.sb3 import batch_policy
 from ...env.fast_env import FastEnv
 from ...env.render import rendered_here
-from ...forked import deferred
+from ...forked import deferred, idle_work_running
 from ...log import RunRecorder
 from ...spec.irl import min_steps
 from ...spec.models import TaskSpec
@@ -72,7 +72,8 @@ def periodic_evaluator(spec: TaskSpec, model, venv):
     curve points.
 
     The episodes run side by side, one policy call for all of them per step; with a second CPU (`train.workers` >
-    1) the later half of them in a forked child meanwhile (the env workers wait: the same figures either way)."""
+    1) and no work at the lowest priority beside, the later half of them in a forked child meanwhile (the env
+    workers wait: the same figures either way)."""
     if not periodic_every(spec):
         return None
     seeds = [spec.evaluate.seed + i for i in range(spec.evaluate.periodic_episodes)]
@@ -81,8 +82,10 @@ def periodic_evaluator(spec: TaskSpec, model, venv):
     def run_evaluation() -> dict[str, float]:
         act = batch_policy(model, venv, spec.evaluate.sampling_seed)
         # sampled actions draw in turn through all episodes; a child forked after this process rendered (image
-        # observations) would deadlock in Mesa's EGL
-        split = len(seeds) > 1 and spec.train.workers > 1 and not spec.evaluate.sampled and not rendered_here()
+        # observations) would deadlock in Mesa's EGL; and the CPU time the env workers leave belongs to the scripted
+        # expert's evaluation while it runs beside at the lowest priority (else the final evaluation waits for it)
+        split = len(seeds) > 1 and spec.train.workers > 1 and not spec.evaluate.sampled
+        split = split and not rendered_here() and not idle_work_running()
         half = len(seeds) // 2 if split else len(seeds)
         rest = partial(batched_episodes, envs[half:], act, seeds[half:])
         later = None
