@@ -11,9 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fastrl.agents.sb3 import make_vec_env
+from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.agents.workers import SPIN
 from fastrl.forked import idle_work_running
+from fastrl.runner.train import monitoring
 from fastrl.runner.train.beside import Beside, ChildFailed
 from fastrl.runner.train.evaluation import evaluate_run
 from fastrl.spec import load_spec
@@ -145,9 +146,6 @@ def test_a_split_evaluation_gives_the_episodes_and_images_of_one_process():
 
 
 def test_the_periodic_evaluation_splits_across_two_processes_with_the_same_figures(monkeypatch):
-    from fastrl.agents.sb3 import build_model
-    from fastrl.runner.train import monitoring
-
     started = []
 
     class Counted(Beside):
