@@ -14,7 +14,7 @@ import pytest
 from fastrl.agents.sb3 import build_model, make_vec_env
 from fastrl.agents.workers import SPIN
 from fastrl.forked import idle_work_running
-from fastrl.runner.train import monitoring
+from fastrl.runner.train import evaluation, monitoring
 from fastrl.runner.train.beside import Beside, ChildFailed
 from fastrl.runner.train.evaluation import evaluate_run
 from fastrl.spec import load_spec
@@ -154,7 +154,7 @@ def test_the_periodic_evaluation_splits_across_two_processes_with_the_same_figur
             super().__init__(fn, **kwargs)
 
     monkeypatch.setattr(monitoring, "Beside", Counted)
-    monkeypatch.setattr(monitoring, "rendered_here", lambda: False)  # an earlier test in this process may have
+    monkeypatch.setattr(evaluation, "rendered_here", lambda: False)  # an earlier test in this process may have
     # rendered; these episodes render nothing, so the child may fork
     figures = []
     for workers, idle_beside in ((1, False), (2, False), (2, True)):

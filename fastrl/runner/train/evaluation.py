@@ -31,9 +31,7 @@ def evaluate_run(
     ev = spec.evaluate
     seeds = evaluation_seeds(spec)
     t0 = time.perf_counter()
-    # a sampled evaluation's draws follow one another through its episodes, so they stay in one process; and a
-    # child forked after this process rendered would deadlock in Mesa's EGL as soon as it rendered itself
-    split = len(seeds) > 1 and spec.train.workers > 1 and not ev.sampled and not rendered_here()
+    split = split_across_cores(spec, len(seeds))
     half = len(seeds) // 2 if split else len(seeds)
     rest = partial(agent_episodes, spec, policy, seeds[half:], ev.record_episodes - half)
     jobs, env = [], None
@@ -66,6 +64,13 @@ def evaluate_run(
                 env.close()
     out["eval_seconds"] = time.perf_counter() - t0
     return out
+
+
+def split_across_cores(spec: TaskSpec, episodes: int) -> bool:
+    """Whether evaluation episodes may run half in a forked child: a second CPU (`train.workers` > 1), more than
+    one episode, no sampled actions (their draws follow one another through the episodes) and no render in this
+    process yet (a child forked after it would deadlock in Mesa's EGL as soon as it rendered itself)."""
+    return episodes > 1 and spec.train.workers > 1 and not spec.evaluate.sampled and not rendered_here()
 
 
 def evaluation_env(spec: TaskSpec) -> FastEnv:

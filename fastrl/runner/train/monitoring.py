@@ -9,7 +9,6 @@ import numpy as np
 
 from ...agents.sb3 import batch_policy
 from ...env.fast_env import FastEnv
-from ...env.render import rendered_here
 from ...forked import deferred, idle_work_running
 from ...log import RunRecorder
 from ...spec.irl import min_steps
@@ -17,6 +16,7 @@ from ...spec.models import TaskSpec
 from ..runs.stops import shielded
 from .beside import Beside, child_or_here
 from .evaluate import batched_episodes, batched_summary
+from .evaluation import split_across_cores
 from .monitor import (
     Checkpoints,
     CurvePoints,
@@ -81,11 +81,9 @@ def periodic_evaluator(spec: TaskSpec, model, venv):
 
     def run_evaluation() -> dict[str, float]:
         act = batch_policy(model, venv, spec.evaluate.sampling_seed)
-        # sampled actions draw in turn through all episodes; a child forked after this process rendered (image
-        # observations) would deadlock in Mesa's EGL; and the CPU time the env workers leave belongs to the scripted
-        # expert's evaluation while it runs beside at the lowest priority (else the final evaluation waits for it)
-        split = len(seeds) > 1 and spec.train.workers > 1 and not spec.evaluate.sampled
-        split = split and not rendered_here() and not idle_work_running()
+        # the CPU time the env workers leave belongs to the scripted expert's evaluation while it runs beside at the
+        # lowest priority (else the final evaluation waits for it)
+        split = split_across_cores(spec, len(seeds)) and not idle_work_running()
         half = len(seeds) // 2 if split else len(seeds)
         rest = partial(batched_episodes, envs[half:], act, seeds[half:])
         later = None
