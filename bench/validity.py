@@ -91,6 +91,7 @@ def measure(task: str, family: str, seed: int, root: Path, sets: tuple[str, ...]
         "sets": list(sets),
         "tau_b": taus,
         "chosen_level": sum(c["skill"] for c in done.chosen) / len(done.chosen),  # whom it learned from (5: experts)
+        "steps": [json.loads((d / "meta.json").read_text()).get("trained_timesteps") for d in done.learned],
         "seconds": time.perf_counter() - t0,
     }
 
@@ -146,7 +147,9 @@ def main() -> None:
                 rows.append(measure(task, family, seed, args.root, sets))
                 t = rows[-1]["tau_b"]
                 print(
-                    f"{task} {family} s{seed}: " + ", ".join(f"{k} {t[k]:.2f}" for k in t if t[k] is not None),
+                    f"{task} {family} s{seed}: "
+                    + ", ".join(f"{k} {t[k]:.2f}" for k in t if t[k] is not None)
+                    + f"; {rows[-1]['seconds']:.0f} s, steps {rows[-1]['steps']}",
                     flush=True,
                 )
                 args.json.parent.mkdir(parents=True, exist_ok=True)
