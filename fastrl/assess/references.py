@@ -46,6 +46,7 @@ def reference_scores(
         "learned": scorer.learned,
         "reward_hash": _reward_identity(scorer),
         "scores": list(NORMALISED),
+        "learned_sums": "per subtask reached",  # learned_scores divides them (caches before 2026-12-06 did not)
     }
     if recordings is not None:
         key["expert"] = sorted(f"{t.meta.get('subject', '')}:{t.meta.get('seed', 0)}" for t in recordings)

@@ -14,7 +14,7 @@ from fastrl.assess.kinematic import deviation_by_progress, log_dimensionless_jer
 from fastrl.assess.ranking import _boot_kendall, _scipy_stats, _spearman, _stats, rank_correlations
 from fastrl.assess.references import compute_expert_paths, expert_paths, reference_scores
 from fastrl.assess.report import build_report, score_files
-from fastrl.assess.scoring import Scorer, held_to_limit, normalise
+from fastrl.assess.scoring import Scorer, held_to_limit, normalise, subtasks_attempted
 from fastrl.cli import app
 from fastrl.data.replay import expert_trajectories, replay, rollout_trajectory
 from fastrl.data.trajectory import Trajectory
@@ -359,3 +359,18 @@ def test_a_trajectory_that_stops_early_is_scored_as_held_still_to_the_time_limit
     _, infos, _ = replay(scorer.env, cut)  # scored in one pass: the same as the cut replayed, then held and replayed
     _, _, rewards = replay(scorer.env, held_to_limit(cut, spec, len(infos)))
     assert not infos[-1]["success"] and stopped.scores["heuristic"] == pytest.approx(rewards.sum(), abs=1e-12)
+
+
+def test_a_trainee_who_stops_early_pays_the_learned_cost_of_each_subtask_reached(airl_run):
+    scorer = Scorer(load_spec(airl_run / "spec.yaml"))
+    scorer.attach(load_networks(airl_run / "networks"))
+    full = expert_trajectories(scorer.env, [0])[0]
+    n = len(full.time) // 3
+    whole, stopped = scorer.score(full), scorer.score(Trajectory(full.time[:n], full.portal[:n], full.meta))
+    total, done = stopped.meta["subtasks_total"], stopped.meta["subtasks_done"]
+    assert whole.meta["subtasks_done"] == total and 0 < done + 1 < total  # it stopped on a subtask it had reached
+    assert subtasks_attempted(whole.meta) == total and subtasks_attempted(stopped.meta) == done + 1
+    for scored, per in ((whole, total), (stopped, done + 1)):
+        assert scored.scores["reward"] == pytest.approx(scored.rewards.sum() / per, rel=1e-9)
+        assert scored.scores["value"] == pytest.approx(scored.values.sum() / per, rel=1e-9)
+    assert subtasks_attempted({"subtasks_done": 0, "subtasks_total": 0}) == 1  # a task without subtasks: the sum
