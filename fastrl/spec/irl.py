@@ -146,6 +146,13 @@ class Generator(Strict):
         "its critic is the learned value that scores trainees, and an anchored clone that completes the task at the "
         "first evaluations left it too few (RESULTS: validity); 0: any evaluation may stop it",
     )
+    stop_at_subtasks: float | None = Field(
+        None,
+        gt=0,
+        le=1,
+        description="the share of subtasks at which an evaluation (after min_steps) stops the PPO generator; null: "
+        "evaluate.stop_at_subtasks, forward RL's",
+    )
     late_starts: float = Field(
         0.0,
         ge=0,
@@ -200,6 +207,13 @@ def min_steps(train: Train, irl: IRL) -> int:
     """Steps the PPO generator trains before an evaluation may stop it (`irl.generator.min_steps`; 0 otherwise)."""
     gen = ppo_generator(train, irl)
     return gen.min_steps if gen is not None else 0
+
+
+def stop_at_subtasks(train: Train, irl: IRL, evaluate_at: float | None) -> float | None:
+    """The share of subtasks at which an evaluation stops training: the PPO generator's own where it has one
+    (`irl.generator.stop_at_subtasks`), else `evaluate_at` (`evaluate.stop_at_subtasks`)."""
+    gen = ppo_generator(train, irl)
+    return gen.stop_at_subtasks if gen is not None and gen.stop_at_subtasks is not None else evaluate_at
 
 
 def late_starts(train: Train, irl: IRL) -> float:

@@ -15,7 +15,7 @@ from fastrl.runner.train.monitor import (
     TrainingMonitor,
 )
 from fastrl.spec import load_spec
-from fastrl.spec.irl import min_steps
+from fastrl.spec.irl import min_steps, stop_at_subtasks
 
 from ..conftest import spec_file
 
@@ -77,3 +77,15 @@ def test_no_stop_before_the_generators_least_steps(tmp_path):
     assert calls[0] < 512  # an evaluation came earlier and did not stop it
     shipped = load_spec(spec_file("tracelines"), ["irl.algorithm=airl"])
     assert min_steps(shipped.train, shipped.irl) == 200_000 and min_steps(spec.train, spec.irl) == 0
+
+
+def test_the_generator_stops_at_its_own_share_of_subtasks_and_forward_rl_at_the_evaluations():
+    def stop_at(*overrides):
+        spec = load_spec(spec_file("tracelines"), list(overrides))
+        return stop_at_subtasks(spec.train, spec.irl, spec.evaluate.stop_at_subtasks)
+
+    assert stop_at() == 0.95  # forward RL: evaluate.stop_at_subtasks
+    assert stop_at("irl.algorithm=airl") == 0.9 and stop_at("irl.algorithm=gail") == 0.9  # the PPO generator's own
+    assert stop_at("irl.algorithm=airl", "irl.generator.stop_at_subtasks=null") == 0.95
+    assert stop_at("irl.algorithm=airl", "evaluate.stop_at_subtasks=null") == 0.9
+    assert stop_at("irl.algorithm=airl", "train.algo=SAC", "actions.mode=rates") == 0.95  # no PPO generator

@@ -11,7 +11,7 @@ from ...agents.sb3 import batch_policy
 from ...env.fast_env import FastEnv
 from ...forked import deferred, idle_work_running
 from ...log import RunRecorder
-from ...spec.irl import min_steps
+from ...spec.irl import min_steps, stop_at_subtasks
 from ...spec.models import TaskSpec
 from ..runs.stops import shielded
 from .beside import Beside, child_or_here
@@ -55,7 +55,8 @@ def training_monitor(
         parts=learner.parts,
         before_save=recorder.flush,
     )
-    stop_at, after = spec.evaluate.stop_at_subtasks, min_steps(spec.train, spec.irl)
+    stop_at = stop_at_subtasks(spec.train, spec.irl, spec.evaluate.stop_at_subtasks)
+    after = min_steps(spec.train, spec.irl)
     stop = []
     if evaluation and stop_at is not None:
         stop = [StopAtSubtasks(evaluation=evaluation, at=stop_at, after=after)]
