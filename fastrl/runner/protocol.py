@@ -19,6 +19,7 @@ from ..data.trajectory import Trajectory, TrajectoryError
 from ..spec import load_spec
 from .runs.rundir import new_run_dir, update_meta, write_meta
 from .score.assessment import Assessment, assess, outputs_for
+from .score.video import VIDEO_SUFFIXES
 from .score.video_inputs import video_files, video_overrides, videos_as_trajectories
 
 BY = {
@@ -116,6 +117,17 @@ def write_best(
     return paths
 
 
+def nothing_there(inputs: list[Path]) -> str:
+    """Why inputs that hold no recording at all gave nothing to learn from, naming a folder one level down that
+    holds some."""
+    kinds = (".npz", *VIDEO_SUFFIXES)
+    below = [
+        f.parent for d in map(Path, inputs) if d.is_dir() for f in sorted(d.glob("*/*")) if f.suffix.lower() in kinds
+    ]
+    hint = f"; {below[0]} holds some: name that folder" if below else ""
+    return f"no recording (.npz or video) in {', '.join(map(str, inputs))}: nothing to learn from{hint}"
+
+
 def run_protocol(
     inputs: list[Path],
     spec_path: Path,
@@ -157,7 +169,9 @@ def run_protocol(
     if not ranked:
         if run is not None:  # only the unusable videos' poses were written: nothing to keep
             shutil.rmtree(run)
-        first = f"; {len(skipped)} skipped, the first: {skipped[0]}" if skipped else ""
+        if not skipped:
+            raise FileNotFoundError(nothing_there(inputs))
+        first = f"; {len(skipped)} skipped, the first: {skipped[0]}"
         raise FileNotFoundError(f"no recording could be read and replayed: nothing to learn from{first}")
     chosen = ranked[:top]
     run = run or new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")

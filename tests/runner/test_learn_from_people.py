@@ -194,3 +194,9 @@ def test_assess_reports_bad_options_and_empty_cohorts_in_one_line(tmp_path):
         res = CliRunner().invoke(app, ["assess", str(empty), "--spec", str(NO_EXPERT), "--runs", str(tmp_path), *extra])
         assert res.exit_code == 2 and message in res.output and "Traceback" not in res.output, res.output
     assert not list(tmp_path.glob("medial_pair/*"))  # nothing half-made
+    nested = tmp_path / "course" / "cohort"
+    nested.mkdir(parents=True)
+    (nested / "L1-S01.npz").write_bytes(b"nothing")
+    res = CliRunner().invoke(app, ["assess", str(nested.parent), "--spec", str(NO_EXPERT), "--runs", str(tmp_path)])
+    message = f"no recording (.npz or video) in {nested.parent}: nothing to learn from; {nested} holds some"
+    assert res.exit_code == 2 and message in " ".join(res.output.split()), res.output
