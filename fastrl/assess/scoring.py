@@ -134,7 +134,7 @@ class Scorer:
     def add_learned(self, scored: TrajectoryScores, obs: np.ndarray) -> None:
         """Fill the learned reward, value and potential of a replayed trajectory (nothing without learned networks)."""
         if self.learned:
-            with_learned(scored, learned_scores(self.networks, obs, subtasks_attempted(scored.meta)))
+            with_learned(scored, learned_scores(self.networks, obs, subtasks_reached(scored.meta)))
 
     def load_file(self, path: Path) -> Trajectory:
         """Load and check one file, resampled to the control rate if it is off that grid; TrajectoryError or
@@ -180,17 +180,17 @@ def held_still(spec: TaskSpec, given: int, replayed: int, success: bool) -> floa
     return max(0, episode_samples(spec) - min(given, replayed)) / spec.episode.control_hz
 
 
-def subtasks_attempted(meta: dict) -> int:
+def subtasks_reached(meta: dict) -> int:
     """The subtasks a trajectory reached: those it did and the one it was on when it stopped (all of them once
     done; 1 in a task without subtasks)."""
     return max(1, min(meta["subtasks_done"] + 1, meta["subtasks_total"]))
 
 
-def learned_scores(networks, obs: np.ndarray, attempted: int = 1) -> dict:
+def learned_scores(networks, obs: np.ndarray, reached: int = 1) -> dict:
     """Learned return, value and mean potential of one trajectory's observations, and the value of each state
     ("values") and reward ("rewards"); each trajectory is evaluated as one batch, so its numbers never depend on
     the others. Reward and value count from their ceilings, the best the demonstrations reached, and are summed
-    per subtask `attempted`: a demonstrated step earns at most zero, every step below costs, a slower trainee never
+    per subtask `reached`: a demonstrated step earns at most zero, every step below costs, a slower trainee never
     scores higher for the time alone, and one who stops early pays the cost of each subtask reached, not of the
     task (RESULTS: validity). Networks saved without a value ceiling keep the mean value."""
     rewards = networks.reward(obs).astype(float) - networks.reward_ceiling
@@ -199,8 +199,8 @@ def learned_scores(networks, obs: np.ndarray, attempted: int = 1) -> dict:
     if ceiling is not None:
         values = values - ceiling
     return {
-        "reward": float(rewards.sum()) / attempted,
-        "value": float(values.mean() if ceiling is None else values.sum() / attempted),
+        "reward": float(rewards.sum()) / reached,
+        "value": float(values.mean() if ceiling is None else values.sum() / reached),
         "potential": float(networks.potential(obs).mean()) if networks.has_potential else None,
         "values": values,
         "rewards": rewards,

@@ -14,7 +14,7 @@ from fastrl.assess.kinematic import deviation_by_progress, log_dimensionless_jer
 from fastrl.assess.ranking import _boot_kendall, _scipy_stats, _spearman, _stats, rank_correlations
 from fastrl.assess.references import compute_expert_paths, expert_paths, reference_scores
 from fastrl.assess.report import build_report, score_files
-from fastrl.assess.scoring import Scorer, held_to_limit, normalise, subtasks_attempted
+from fastrl.assess.scoring import Scorer, held_to_limit, normalise, subtasks_reached
 from fastrl.cli import app
 from fastrl.data.replay import expert_trajectories, replay, rollout_trajectory
 from fastrl.data.trajectory import Trajectory
@@ -369,8 +369,8 @@ def test_a_trainee_who_stops_early_pays_the_learned_cost_of_each_subtask_reached
     whole, stopped = scorer.score(full), scorer.score(Trajectory(full.time[:n], full.portal[:n], full.meta))
     total, done = stopped.meta["subtasks_total"], stopped.meta["subtasks_done"]
     assert whole.meta["subtasks_done"] == total and 0 < done + 1 < total  # it stopped on a subtask it had reached
-    assert subtasks_attempted(whole.meta) == total and subtasks_attempted(stopped.meta) == done + 1
+    assert subtasks_reached(whole.meta) == total and subtasks_reached(stopped.meta) == done + 1
     for scored, per in ((whole, total), (stopped, done + 1)):
         assert scored.scores["reward"] == pytest.approx(scored.rewards.sum() / per, rel=1e-9)
         assert scored.scores["value"] == pytest.approx(scored.values.sum() / per, rel=1e-9)
-    assert subtasks_attempted({"subtasks_done": 0, "subtasks_total": 0}) == 1  # a task without subtasks: the sum
+    assert subtasks_reached({"subtasks_done": 0, "subtasks_total": 0}) == 1  # a task without subtasks: the sum

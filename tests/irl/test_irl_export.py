@@ -247,9 +247,9 @@ def test_reward_and_value_count_from_the_best_demonstrated_step(ppo_run, tmp_pat
     held = learned_scores(nets, longer)["value"]
     assert held == pytest.approx(scores["value"] + 20 * (v[-1] - nets.value_ceiling), rel=1e-5)
     assert held < scores["value"]  # the held state is below the ceiling: more steps of it cost more
-    per = learned_scores(nets, obs, attempted=3)  # one who stopped on the third subtask: the cost of each
+    per = learned_scores(nets, obs, reached=3)  # one who stopped on the third subtask: the cost of each
     assert (per["reward"], per["value"]) == pytest.approx((scores["reward"] / 3, scores["value"] / 3), rel=1e-12)
-    assert learned_scores(old, obs, attempted=3)["value"] == pytest.approx(float(old.value(obs).mean()), rel=1e-6)
+    assert learned_scores(old, obs, reached=3)["value"] == pytest.approx(float(old.value(obs).mean()), rel=1e-6)
     for name in ("reward", "value"):
         for bad in ("high", float("nan")):
             edit_header(tmp_path, name, lambda m, bad=bad: m.update(ceiling=bad))
