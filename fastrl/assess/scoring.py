@@ -101,9 +101,11 @@ class Scorer:
         return scored
 
     def replayed(self, traj: Trajectory, name: str = "") -> tuple[TrajectoryScores, np.ndarray]:
-        """Replay one trajectory and score all but the learned scores; also its observations (for add_learned).
-        A trajectory that stops before it succeeds and before the time limit is scored as if the trainee then held
-        the scope still until the limit (quitting is not finishing fast)."""
+        """Replay one trajectory (resampled to the control rate if it is off that grid) and score all but the learned
+        scores; also its observations (for add_learned). A trajectory that stops before it succeeds and before the
+        time limit is scored as if the trainee then held the scope still until the limit (quitting is not finishing
+        fast)."""
+        traj = to_control_rate(traj, self.spec.episode.control_hz)
         given = len(traj.time)
         traj = held_to_limit(traj, self.spec, given) or traj  # its first `given` samples are the trajectory's own
         done = replay_arrays(self.env, traj)
@@ -137,13 +139,12 @@ class Scorer:
             with_learned(scored, learned_scores(self.networks, obs, subtasks_reached(scored.meta)))
 
     def load_file(self, path: Path) -> Trajectory:
-        """Load and check one file, resampled to the control rate if it is off that grid; TrajectoryError or
-        ValueError name the file and the problem."""
+        """Load and check one file; TrajectoryError or ValueError name the file and the problem."""
         traj = Trajectory.load(path)
         problem = foreign_problem(traj, self.spec) or (VIDEO_ONLY if traj.portal is None else None)
         if problem:
             raise TrajectoryError(f"{path}: {problem}")
-        return to_control_rate(traj, self.spec.episode.control_hz)
+        return traj
 
     def score_file(self, path: Path) -> TrajectoryScores:
         """Load, check and score one file (see load_file)."""

@@ -180,6 +180,19 @@ def test_bad_and_foreign_files_are_reported_and_the_rest_scored(scorer, tmp_path
     assert any("another task" in p for p in problems)
 
 
+def test_a_recording_scores_the_same_from_another_clock_start_and_at_a_rate_on_the_control_grid(scorer):
+    traj = degraded(scorer, 6, 0.2, 3)
+    t, p = traj.time, traj.portal
+    fine = np.arange(0.0, t[-1] + 1e-9, 1.0 / 60.0)  # 60 Hz: every third sample on the 20 Hz grid
+    portal = np.stack([np.interp(fine, t, p[:, j]) for j in range(5)], axis=1)
+    base = scorer.score(traj)
+    for other in (Trajectory(t + 1234.5, p, traj.meta), Trajectory(fine + 7.25, portal, traj.meta)):
+        again = scorer.score(other)
+        for k in ("heuristic", "subtasks", "time", "path_length"):
+            assert again.scores[k] == pytest.approx(base.scores[k], rel=1e-6, abs=1e-9), k
+    assert 0.0 < base.scores["subtasks"] < 1.0 or base.scores["time"] < 8.0  # a recording with something to lose
+
+
 def test_report_groups_by_level_and_ranks_levels(scorer):
     trajs = [degraded(scorer, s, noise, level) for level, noise in ((3, 0.0), (2, 0.3), (1, 0.8)) for s in (5,)]
     scored = [scorer.score(t, f"t{i}") for i, t in enumerate(trajs)]
