@@ -31,20 +31,23 @@ ALGOS = {"PPO": PPO, "SAC": SAC}
 ACTIVATIONS = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}
 
 
-def make_vec_env(spec: TaskSpec, n_envs: int, seed: int, workers: int = 1, late_starts: float = 0.0) -> VecEnv:
+def make_vec_env(
+    spec: TaskSpec, n_envs: int, seed: int, workers: int = 1, late_starts: float = 0.0, later_subtasks: float = 0.0
+) -> VecEnv:
     """Vectorised FastEnvs, stepped in batches by `workers` processes (this one included), optionally normalised;
-    `late_starts`: each env's episodes after its first start up to that share of the time limit late.
+    `late_starts`: each env's episodes after its first start up to that share of the time limit late;
+    `later_subtasks`: that share of them at a random later subtask.
 
     Cheap envs step fastest in batches: one process per env (SB3's SubprocVecEnv) costs more in messages than
     it gains. The split never changes the trajectories. Learning from demonstrations, env rewards are replaced
     by the discriminator's, so they are not normalised.
     """
     processes = min(workers, n_envs, os.cpu_count() or 1)
-    if processes > 1:
-        make = partial(FastEnv, spec, late_starts=late_starts)  # pickles: image workers start from a fresh process
+    make = partial(FastEnv, spec, late_starts=late_starts, later_subtasks=later_subtasks)  # pickles: image workers
+    if processes > 1:  # start from a fresh process
         venv = SplitVecEnv(make_env=make, n_envs=n_envs, processes=processes, fork=spec.observation.image is None)
     else:
-        venv = FreshInfoVecEnv([lambda: FastEnv(spec, late_starts=late_starts) for _ in range(n_envs)])
+        venv = FreshInfoVecEnv([make for _ in range(n_envs)])
     venv.seed(seed)
     train = spec.learning()
     norm = train.normalize

@@ -37,10 +37,12 @@ class FastEnv(gym.Env):
         height: int = 128,
         *,
         late_starts: float = 0.0,
+        later_subtasks: float = 0.0,
         family: type[Task] | None = None,
     ):
         self.task_spec = spec
         self.late_starts = late_starts  # unseeded resets (a vector env's next episodes) start up to this share late
+        self.later_subtasks = later_subtasks  # and this share of them at a random later subtask
         self.task: CompiledTask = compile_task(spec)
         self.model, self.data = self.task.model, mujoco.MjData(self.task.model)
         self.render_mode, self.width, self.height = render_mode, width, height
@@ -86,6 +88,10 @@ class FastEnv(gym.Env):
             self.frames.reset(seed)
         self.steps = 0
         self.family.initialize_episode(self.np_random, options)
+        subtasks = self.state.subtasks_total
+        if self.later_subtasks and seed is None and not options and subtasks > 1:
+            if self.np_random.random() < self.later_subtasks:
+                self.family.start_at(int(self.np_random.integers(1, subtasks)))
         if self.late_starts and seed is None and not options:
             self.steps = int(self.np_random.integers(0, int(self.late_starts * self.max_steps) + 1))
             self.state.time = self.steps * self.dt

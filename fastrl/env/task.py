@@ -79,6 +79,17 @@ class Task:
         s.completed = False
         self.paint()
 
+    def start_at(self, k: int) -> None:
+        """After initialize_episode: make subtask k current, the ones before it done (a training start)."""
+        s = self.state
+        self.done_count = s.subtasks_done = k
+        self.select(k)
+        self.retarget()
+        s.prev_potential = s.potential
+        s.dwell = s.prev_dwell = s.dwell_best = 0.0
+        s.green = cue_green(s)
+        self.paint()
+
     def episode_start(self, options: dict) -> EpisodeStart:
         """The spec's start before the reset terms: avatars where the spec puts them, the scope at its start pose."""
         t = self.compiled.targets

@@ -24,6 +24,8 @@ from .state_reward import Observation, Reward
 from .study import Study
 from .training import Evaluate, Train
 
+DOME_KINDS = ("image_centring", "periscoping", "trace_lines")  # one scope, ordered avatars on a FAST dome
+
 
 class StartPose(Strict):
     """Initial portal coordinates of the scope."""
@@ -233,6 +235,16 @@ class TaskSpec(Strict):
                         lm.organ,
                     )
                 )
+        one_scope_dome = self.task.kind in DOME_KINDS and not self.instruments and not self.task.bodies
+        if self.train.later_subtasks and not one_scope_dome:
+            errors.append(
+                (
+                    ("train", "later_subtasks"),
+                    "starts at later subtasks need one scope and a dome task's ordered avatars "
+                    f"({', '.join(DOME_KINDS)})",
+                    self.train.later_subtasks,
+                )
+            )
         _raise(errors + instrument_errors(self) + loose_errors(self))
         for i, av in enumerate(self.task.avatars):
             problem = avatar_problem(self, av)
@@ -271,6 +283,12 @@ class TaskSpec(Strict):
     def cloned_generator(self) -> bool:
         """Whether GAIL/AIRL's PPO generator starts from the demonstrations' behavioural clone."""
         return starts_cloned(self.train, self.irl)
+
+    @property
+    def training_later_subtasks(self) -> float:
+        """The share of training episodes that start at a later subtask: forward RL's `train.later_subtasks`, 0
+        when learning from demonstrations."""
+        return 0.0 if self.irl.algorithm != "none" else self.train.later_subtasks
 
     @property
     def generator_late_starts(self) -> float:

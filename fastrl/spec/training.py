@@ -140,6 +140,14 @@ class Train(Strict):
         description="PPO from the spec's reward, starting from the scripted expert's clone refined by DAgger (null: "
         "from scratch); episode seeds from 100,000 x train.seed",
     )
+    later_subtasks: float = Field(
+        0.0,
+        ge=0,
+        le=1,
+        description="forward RL: this share of each training env's episodes after its first start at a random later "
+        "subtask, the earlier ones done, so every subtask is practised from the start (evaluation always starts at "
+        "the first; GAIL, AIRL and BC never do: their demonstrations start there); 0: every episode at the first",
+    )
     normalize: Normalize = Normalize()
     checkpoint_every: int = Field(100_000, ge=1, description="timesteps between checkpoints")
     log_every: int = Field(10_000, ge=1, description="timesteps between training-curve points")

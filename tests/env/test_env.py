@@ -299,6 +299,46 @@ def test_stepping_after_a_replayed_pose_matches_stepping_after_placing_it():
         assert np.allclose(oa, ob, atol=1e-6)
 
 
+def test_later_subtasks_start_unseeded_episodes_at_a_later_avatar_the_expert_then_finishes():
+    """A forward-RL env's episodes after its first start at a random later avatar, the earlier ones done, in the
+    state, the observation and the colours; seeded resets (evaluations) and replays (options) start at the first;
+    the same seeds draw the same starts, and the scripted expert finishes the task from one."""
+    from fastrl.env import FastEnv
+    from fastrl.spec import load_spec
+    from fastrl.terms.observations import subtask_fraction
+
+    spec = load_spec(spec_file("imagecentring"))
+    env, twin = FastEnv(spec, later_subtasks=1.0), FastEnv(spec, later_subtasks=1.0)
+    total = env.state.subtasks_total
+    env.reset(seed=3)
+    twin.reset(seed=3)
+    assert env.state.subtasks_done == env.state.subtask == 0
+    starts = []
+    for _ in range(20):
+        obs, _ = env.reset()
+        twin.reset()
+        s, k = env.state, env.state.subtasks_done
+        starts.append(k)
+        assert twin.state.subtasks_done == k and s.subtask == k and s.target_pos == tuple(env.family.t_pos[k])
+        assert subtask_fraction(s) == (pytest.approx(k / total),) and s.dwell == 0.0 and s.prev_potential == s.potential
+    assert set(starts) == set(range(1, total))
+    env.reset(seed=4)
+    assert env.state.subtasks_done == 0
+    env.reset(options={"portal": env.portal_coordinates()})
+    assert env.state.subtasks_done == 0
+    obs, _ = env.reset()
+    first = env.state.subtasks_done
+    expert = ScriptedExpert(env)
+    terminated = truncated = False
+    while not (terminated or truncated):
+        obs, _, terminated, truncated, info = env.step(expert.act(obs))
+    assert terminated and env.state.subtasks_done == total and first >= 1
+    untouched = FastEnv(spec)
+    untouched.reset(seed=3)
+    untouched.reset()
+    assert untouched.state.subtasks_done == 0  # the default: every episode at the first
+
+
 def test_late_starts_run_the_clock_on_unseeded_resets_only():
     """A generator env's episodes after its first start late, on the clock the policy observes; seeded resets
     (evaluations) and replays (options) always start at 0 s, and a late episode ends at the time limit."""

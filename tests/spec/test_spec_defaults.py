@@ -90,3 +90,17 @@ def test_a_generator_option_changes_the_hash():
     spec = load_spec(spec_file("periscoping"))
     late = load_spec(spec_file("periscoping"), ["irl.generator.late_starts=0.5"])
     assert spec_hash(late) != spec_hash(spec) and task_hash(late) == task_hash(spec)
+
+
+def test_later_subtasks_are_forward_rl_alone_on_a_dome_task_and_change_no_task_hash():
+    spec = load_spec(spec_file("imagecentring"))
+    assert spec.train.later_subtasks == 0.5 and spec.training_later_subtasks == 0.5
+    assert load_spec(spec_file("imagecentring"), ["irl.algorithm=airl"]).training_later_subtasks == 0.0
+    assert load_spec(spec_file("imagecentring"), ["irl.algorithm=bc"]).training_later_subtasks == 0.0
+    assert load_spec(spec_file("tracelines")).training_later_subtasks == 0.0
+    none = load_spec(spec_file("imagecentring"), ["train.later_subtasks=0"])
+    assert task_hash(none) == task_hash(spec) and spec_hash(none) != spec_hash(spec)
+    for name in ("liver_tour", "triangulation"):
+        with pytest.raises(SpecError, match="later_subtasks") as exc:
+            load_spec(spec_file(name), ["train.later_subtasks=0.5"])
+        assert "ordered avatars" in str(exc.value)

@@ -163,7 +163,9 @@ def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
 def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = True) -> Learner:
     """The model (and, learning from demonstrations, the discriminator and its callback) for a run."""
     train = spec.learning()
-    venv = make_vec_env(spec, train.n_envs, train.seed, train.workers, spec.generator_late_starts)
+    venv = make_vec_env(
+        spec, train.n_envs, train.seed, train.workers, spec.generator_late_starts, spec.training_later_subtasks
+    )
     irl = spec.irl
     if irl.algorithm in ("none", "bc"):
         learner = Learner(spec, venv, build_model(spec, venv))
