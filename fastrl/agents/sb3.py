@@ -43,8 +43,9 @@ def make_vec_env(
     by the discriminator's, so they are not normalised.
     """
     processes = min(workers, n_envs, os.cpu_count() or 1)
-    make = partial(FastEnv, spec, late_starts=late_starts, later_subtasks=later_subtasks)  # pickles: image workers
-    if processes > 1:  # start from a fresh process
+    # a partial pickles: image workers start from a fresh process
+    make = partial(FastEnv, spec, late_starts=late_starts, later_subtasks=later_subtasks)
+    if processes > 1:
         venv = SplitVecEnv(make_env=make, n_envs=n_envs, processes=processes, fork=spec.observation.image is None)
     else:
         venv = FreshInfoVecEnv([make for _ in range(n_envs)])
