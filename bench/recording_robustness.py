@@ -35,13 +35,16 @@ NOISE = {"noise 0.1 deg 0.2 mm": (0.1, 0.2), "noise 0.3 deg 0.5 mm": (0.3, 0.5)}
 
 def resampled(t: np.ndarray, p: np.ndarray, hz: float, jitter: float, rng) -> tuple[np.ndarray, np.ndarray]:
     """The coordinates interpolated onto a grid of `hz` (angles unwrapped), its stamps moved by up to +-jitter s."""
-    grid = np.arange(0.0, t[-1] + 1e-9, 1.0 / hz)
+    from fastrl.data.frames import control_grid
+    from fastrl.data.poses import resample_columns
+
+    grid = control_grid(t, hz)
     if jitter:
-        grid = np.sort(np.clip(grid + rng.uniform(-jitter, jitter, len(grid)), 0.0, t[-1]))
-        grid[0] = 0.0
+        grid = np.sort(np.clip(grid + rng.uniform(-jitter, jitter, len(grid)), t[0], t[-1]))
+        grid[0] = t[0]
     q = p.copy()
     q[:, 3:] = np.unwrap(q[:, 3:], axis=0)
-    return grid, np.stack([np.interp(grid, t, q[:, j]) for j in range(q.shape[1])], axis=1)
+    return grid, resample_columns(grid, t, q)
 
 
 def noisy(p: np.ndarray, deg: float, mm: float, rng) -> np.ndarray:

@@ -88,10 +88,9 @@ class FastEnv(gym.Env):
             self.frames.reset(seed)
         self.steps = 0
         self.family.initialize_episode(self.np_random, options)
-        subtasks = self.state.subtasks_total
-        if self.later_subtasks and seed is None and not options and subtasks > 1:
+        if self.later_subtasks and seed is None and not options and self.state.subtasks_total > 1:
             if self.np_random.random() < self.later_subtasks:
-                self.family.start_at(int(self.np_random.integers(1, subtasks)))
+                self.family.start_at(int(self.np_random.integers(1, self.state.subtasks_total)))
         if self.late_starts and seed is None and not options:
             self.steps = int(self.np_random.integers(0, int(self.late_starts * self.max_steps) + 1))
             self.state.time = self.steps * self.dt

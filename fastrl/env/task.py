@@ -83,11 +83,8 @@ class Task:
         """After initialize_episode: make subtask k current, the ones before it done (a training start)."""
         s = self.state
         self.done_count = s.subtasks_done = k
-        self.select(k)
-        self.retarget()
+        self.make_current(k)
         s.prev_potential = s.potential
-        s.dwell = s.prev_dwell = s.dwell_best = 0.0
-        s.green = cue_green(s)
         self.paint()
 
     def episode_start(self, options: dict) -> EpisodeStart:
@@ -152,11 +149,16 @@ class Task:
         s.subtasks_done = self.done_count
         self.elapsed = 0.0
         if self.done_count < len(self.t_pos):
-            self.select(self.done_count)
-            self.retarget()
-            s.dwell = s.prev_dwell = s.dwell_best = 0.0
-            s.green = cue_green(s)
+            self.make_current(self.done_count)
         self.paint()
+
+    def make_current(self, k: int) -> None:
+        """Subtask k becomes the cue's target, its dwell bar empty."""
+        s = self.state
+        self.select(k)
+        self.retarget()
+        s.dwell = s.prev_dwell = s.dwell_best = 0.0
+        s.green = cue_green(s)
 
     def cue(self) -> dict:
         """The cue as the info reports it."""
