@@ -6,10 +6,12 @@
 Each repeat runs `python -m fastrl.cli run SPEC` as a subprocess from the checkout (PYTHONPATH pointing at it)
 into a temporary runs folder and times it from launch to exit. With --reference (a checkout of another commit, e.g.
 `git worktree add /work/ref-6dabe3e 6dabe3e`), the same command from that checkout runs interleaved with this one,
-one of each per repeat. Prints the machine and its load, the median, best and worst wall times, the CPU time of the
-command (every process it waited for), and the median run's phases from its meta.json: training (its steps) and the
-final evaluation (the agent's episodes with the recording's images, and the scripted expert's), the rest being
-start-up, building the learner, saving and exit. Issue 41 asks <= 12 s for TraceLines.
+one of each per repeat. This checkout runs twice per repeat: first with the scripted expert's evaluation
+forgotten (its memo in the fastrl cache removed: a spec's first run on a machine), then remembered. Prints the
+machine and its load, the median, best and worst wall times, the CPU time of the command (every process it waited
+for), and the median run's phases from its meta.json: training (its steps) and the final evaluation (the agent's
+episodes with the recording's images, and the scripted expert's), the rest being start-up, building the learner,
+saving and exit. Issue 41 asks <= 12 s for TraceLines.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import argparse
 import json
 import os
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -27,14 +30,16 @@ from pathlib import Path
 
 from common import load_after, machine_line
 
+from fastrl.cache import cache_dir
+
 HERE = Path(__file__).resolve().parent.parent  # this checkout: its fastrl is the one timed
 
 
 class Side:
     """One checkout's `fastrl run`, its wall and CPU times and its runs' meta."""
 
-    def __init__(self, name: str, root: Path, spec: Path):
-        self.name, self.root, self.spec = name, root.resolve(), spec.resolve()
+    def __init__(self, name: str, root: Path, spec: Path, cold: bool = False):
+        self.name, self.root, self.spec, self.cold = name, root.resolve(), spec.resolve(), cold
         self.walls: list[float] = []
         self.cpus: list[float] = []
         self.metas: list[dict] = []
@@ -44,6 +49,8 @@ class Side:
         with tempfile.TemporaryDirectory(prefix="run-speed-") as runs:
             cmd = [sys.executable, "-m", "fastrl.cli", "run", str(self.spec), "--runs", runs, "--no-progress"]
             env = os.environ | {"PYTHONPATH": str(self.root)}
+            if self.cold:  # the scripted expert's evaluation not yet remembered: a spec's first run on a machine
+                shutil.rmtree(cache_dir() / "expert", ignore_errors=True)
             before = resource.getrusage(resource.RUSAGE_CHILDREN)
             t0 = time.perf_counter()
             res = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=self.root)
@@ -75,7 +82,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3, help="runs timed per checkout (median reported)")
     ap.add_argument("--reference", type=Path, help="a checkout of the reference commit, timed interleaved")
     args = ap.parse_args()
-    sides = [Side("this checkout", HERE, args.spec)]
+    sides = [Side("this checkout, first run", HERE, args.spec, cold=True), Side("this checkout", HERE, args.spec)]
     if args.reference is not None:
         sides.insert(0, Side(f"reference {args.reference}", args.reference, args.spec))
     print(f"machine: {machine_line()}")
@@ -86,9 +93,10 @@ def main() -> None:
             print(f"  {side.name}: {side.walls[-1]:.2f} s", flush=True)
     for side in sides:
         print(f"fastrl run, {side.name}: {side.summary()}")
-    if len(sides) == 2:
-        ratio = statistics.median(sides[1].walls) / statistics.median(sides[0].walls)
-        print(f"this checkout / reference, median wall: {ratio:.2f}")
+    if args.reference is not None:
+        for side in sides[1:]:
+            ratio = statistics.median(side.walls) / statistics.median(sides[0].walls)
+            print(f"{side.name} / reference, median wall: {ratio:.2f}")
     print(load_after())
 
 

@@ -50,6 +50,9 @@ def test_env_workers_leave_the_cpu_they_would_poll_away_to_idle_work_beside():
     busy.cancel()
     try:
         assert [v.venv.spin for v in venvs] == [0.0, SPIN] and SPIN > 0
+        venvs[0].reset()
+        venvs[0].step(np.zeros((2,), np.int64))  # the idle work is done: the venv started beside it polls again
+        assert venvs[0].venv.spin == SPIN
     finally:
         for v in venvs:
             v.close()
@@ -94,11 +97,13 @@ def scattered_policy(spec):
 
 
 @pytest.mark.parametrize("name", ["tracelines", "triangulation"])
-def test_expert_beside_the_agent_scores_as_inline(name):
+def test_expert_beside_the_agent_scores_as_inline(name, tmp_path, monkeypatch):
     overrides = ["evaluate.episodes=3", "evaluate.record_episodes=0"]
     inline = load_spec(f"specs/{name}.yaml", [*overrides, "train.workers=1"])
     forked = load_spec(f"specs/{name}.yaml", [*overrides, "train.workers=2"])
+    monkeypatch.setenv("FASTRL_CACHE", str(tmp_path / "inline"))  # each computes the expert's evaluation
     a = evaluate_run(inline, scattered_policy(inline), None, None)
+    monkeypatch.setenv("FASTRL_CACHE", str(tmp_path / "forked"))
     b = evaluate_run(forked, scattered_policy(forked), None, None)
     assert a["expert"] == b["expert"] and a["agent"] == b["agent"]
     assert a["expert"]["subtasks_completed"] == 1.0 > a["agent"]["subtasks_completed"]

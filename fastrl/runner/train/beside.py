@@ -39,13 +39,20 @@ class Beside:
     see `done`). Where this platform cannot fork, or `fork` is false, `fn()` runs here when `result()` asks."""
 
     def __init__(self, fn: Callable[[], Any], *, fork: bool = True, idle: bool = False):
-        self.fn, self.worker, self.child, self.path = fn, None, None, None
+        self.fn, self.worker, self.child, self.path, self.known = fn, None, None, None, False
         if fork and can_fork():
             handle, self.path = tempfile.mkstemp(prefix="fastrl-beside-", suffix=".pickle")  # this user's only
             os.close(handle)
             self.worker = Worker(initializer=_keep, initargs=(fn,), orphan_exit=True, idle=idle)
             self.future = self.worker.submit(_compute, self.path)
             self.child = self.worker.process
+
+    @classmethod
+    def ready(cls, value: Any) -> Beside:
+        """A job whose value is already known: done, nothing forked."""
+        job = cls(lambda: value, fork=False)
+        job.known = True
+        return job
 
     def result(self) -> Any:
         """The value of fn() (its exception, if it raised)."""
@@ -59,8 +66,8 @@ class Beside:
             self.cancel()
 
     def done(self) -> bool:
-        """Whether the child has its result ready (False where `fn()` runs here)."""
-        return self.worker is not None and self.future.done()
+        """Whether the child has its result ready (False where `fn()` runs here, unless known from the start)."""
+        return self.known or (self.worker is not None and self.future.done())
 
     def cancel(self) -> None:
         """Stop the child if it still runs and release it (after this, `result()` computes here)."""

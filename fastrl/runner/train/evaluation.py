@@ -19,6 +19,7 @@ from ..runs.saved import load_policy
 from ..runs.stops import EvaluationInterrupted, shielded, signal_name, stop_on_sigterm
 from .beside import Beside, child_or_here
 from .evaluate import evaluate, summarize
+from .expert_memo import recall, remember
 
 
 def evaluate_run(
@@ -99,6 +100,9 @@ def expert_beside(spec: TaskSpec, *, idle: bool = False) -> Beside | None:
     if not spec.evaluate.expert:
         return None
     seeds = evaluation_seeds(spec)
+    known = recall(spec, seeds)
+    if known is not None:
+        return Beside.ready(known)
     return Beside(lambda: expert_summary(spec, seeds), fork=spec.train.workers > 1, idle=idle)
 
 
@@ -106,11 +110,16 @@ def expert_summary(spec: TaskSpec, seeds: list[int]) -> dict:
     """The scripted expert's evaluation figures on the given seeds (no images, no recording).
 
     The expert acts on the task's state, so it goes without image observations: rendering in a child forked
-    after this process rendered (the evaluation during training) would deadlock in Mesa's EGL."""
+    after this process rendered (the evaluation during training) would deadlock in Mesa's EGL. Computed once per
+    spec, seeds and code on this machine, then recalled (3 s of CPU on TraceLines, beside a run's training)."""
+    known = recall(spec, seeds)
+    if known is not None:
+        return known
     env = FastEnv(without_images(spec))
     expert = ScriptedExpert(env)
     summary, _ = evaluate(env, expert.act, seeds, on_reset=expert.reset)
     env.close()
+    remember(spec, seeds, summary)
     return summary
 
 

@@ -1,0 +1,59 @@
+"""The scripted expert's evaluation, computed once per spec, seeds and code on a machine, then recalled."""
+
+import json
+
+import pytest
+
+from fastrl.runner.train import evaluation, expert_memo
+from fastrl.runner.train.evaluation import evaluation_seeds, expert_beside, expert_summary
+from fastrl.spec import load_spec
+
+TWO = ["evaluate.episodes=2", "evaluate.record_episodes=0"]
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("FASTRL_CACHE", str(tmp_path))
+    return tmp_path
+
+
+def no_expert(env):
+    raise AssertionError("the expert was run again")
+
+
+def test_the_second_evaluation_is_recalled_equal_without_running_the_expert(cache, monkeypatch):
+    spec = load_spec("specs/tracelines.yaml", TWO)
+    seeds = evaluation_seeds(spec)
+    first = expert_summary(spec, seeds)
+    assert first["subtasks_completed"] == 1.0 and len(first["per_episode"]) == 2
+    monkeypatch.setattr(evaluation, "ScriptedExpert", no_expert)
+    assert expert_summary(spec, seeds) == first
+    job = expert_beside(spec, idle=True)
+    assert job.done() and job.child is None and job.result() == first
+
+
+def test_what_the_episodes_depend_on_makes_a_new_key_and_training_does_not(cache):
+    spec = load_spec("specs/tracelines.yaml", TWO)
+    seeds = evaluation_seeds(spec)
+    key = expert_memo.memo_path(spec, seeds)
+    same = ["train.timesteps=1000", "train.workers=1", "irl.algorithm=airl"]
+    assert expert_memo.memo_path(load_spec("specs/tracelines.yaml", [*TWO, *same]), seeds) == key
+    for other in ("reward.features.time.weight=-0.02", "episode.time_limit=20", "evaluate.seed=7"):
+        changed = load_spec("specs/tracelines.yaml", [*TWO, other])
+        assert expert_memo.memo_path(changed, evaluation_seeds(changed)) != key, other
+    assert expert_memo.memo_path(spec, seeds[:1]) != key
+
+
+def test_a_damaged_memo_is_computed_again_and_an_unwritable_cache_costs_nothing(cache, monkeypatch):
+    spec = load_spec("specs/tracelines.yaml", TWO)
+    seeds = evaluation_seeds(spec)
+    first = expert_summary(spec, seeds)
+    path = expert_memo.memo_path(spec, seeds)
+    path.write_text('{"success_rate": 1.0, "per_epi')
+    assert expert_summary(spec, seeds) == first
+    assert json.loads(path.read_text()) == first
+    blocked = cache / "blocked"
+    blocked.write_text("a file where the cache folder would be")
+    monkeypatch.setenv("FASTRL_CACHE", str(blocked))
+    assert expert_summary(spec, seeds) == first
+    assert expert_memo.recall(spec, seeds) is None
