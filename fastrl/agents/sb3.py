@@ -8,10 +8,12 @@ import shutil
 from functools import partial
 from pathlib import Path
 
+import gymnasium as gym
 import numpy as np
 import torch
 from stable_baselines3 import PPO, SAC
 from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.policies import BasePolicy
 from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 
 from ..atomic import DiskFull, atomic_write, fsync_dir, is_disk_full, write_json
@@ -224,12 +226,28 @@ def predictor(model: BaseAlgorithm, sampling_seed: int | None):
     """observations -> actions: the most likely; with a seed, sampled from draws of their own (torch's global
     random state, which training draws from, is left as it was)."""
     if sampling_seed is None:
-        return lambda x: model.predict(x, deterministic=True)[0]
+        return partial(policy_actions, model.policy, deterministic=True)
     seeds = np.random.default_rng(sampling_seed)
 
     def sample(x):
         with torch.random.fork_rng(devices=[]):
             torch.manual_seed(int(seeds.integers(2**62)))
-            return model.predict(x, deterministic=False)[0]
+            return policy_actions(model.policy, x, deterministic=False)
 
     return sample
+
+
+def policy_actions(policy: BasePolicy, obs, deterministic: bool) -> np.ndarray:
+    """SB3's policy.predict for a batch, the same actions, without walking every module to set evaluation mode
+    at each call (a third of a call's 0.4 ms): the mode is set only when training left it on."""
+    if policy.training:
+        policy.set_training_mode(False)
+    obs_tensor, _ = policy.obs_to_tensor(obs)
+    with torch.no_grad():
+        actions = policy._predict(obs_tensor, deterministic=deterministic)
+    actions = actions.cpu().numpy().reshape((-1, *policy.action_space.shape))
+    if isinstance(policy.action_space, gym.spaces.Box):
+        if policy.squash_output:
+            return policy.unscale_action(actions)
+        return np.clip(actions, policy.action_space.low, policy.action_space.high)
+    return actions

@@ -30,3 +30,20 @@ def test_sampled_evaluation_repeats_itself_differs_from_greedy_and_leaves_torch_
     assert torch.equal(torch.rand(3), expected)  # its draws were its own
     assert episodes(10_000) == first
     assert episodes(10_001) != first and episodes(None) != first
+
+
+def test_evaluation_actions_are_sb3_predicts_and_leave_the_policy_in_evaluation_mode():
+    for overrides in ([], ["train.algo=SAC", "actions.mode=rates"]):
+        spec = load_spec(spec_file("tracelines"), ["train.workers=1", "train.n_envs=2", *overrides])
+        venv = make_vec_env(spec, 2, 0)
+        model = build_model(spec, venv, seed=0)
+        obs = venv.reset()
+        for _ in range(3):
+            obs = venv.step(venv.action_space.sample()[None].repeat(2, 0))[0]
+        model.policy.set_training_mode(True)  # as an update leaves it, mid-training
+        fast = policy_function(model, venv)
+        for o in obs:
+            expected = model.predict(venv.normalize_obs(o[None]), deterministic=True)[0][0]
+            assert str(fast(o)) == str(expected if expected.ndim else int(expected))
+        assert not model.policy.training
+        venv.close()
