@@ -10,7 +10,8 @@ settings), SB3's side stable-baselines3 SAC at its library defaults (1 env, 1 up
 make its update 8x slower on a 2-core machine: in its favour).
 
 fastrl: each seed is one `start_run` of specs/<task>.yaml (the code path of `fastrl run SPEC --seed S`, its
-periodic evaluation and early stop as the spec sets them), in a fresh Python process. Time to 95% runs from
+periodic evaluation and early stop as the spec sets them), in a fresh Python process importing the fastrl of
+the checkout the bench is in (PYTHONPATH), so a worktree of another commit times that commit. Time to 95% runs from
 the process start (imports included) to the end of the first periodic evaluation at >= 95% of subtasks; the
 whole command adds the final evaluation, the expert's and the recording. The median over seeds is reported.
 
@@ -119,7 +120,9 @@ def child(args: list[str]) -> dict:
     with tempfile.TemporaryDirectory() as d:
         out = Path(d) / "out.json"
         t0 = time.time()
-        res = subprocess.run([sys.executable, __file__, *args, "--out", str(out)], capture_output=True, text=True)
+        env = os.environ | {"PYTHONPATH": str(ROOT)}  # this checkout's fastrl, not whichever one is installed
+        cmd = [sys.executable, __file__, *args, "--out", str(out)]
+        res = subprocess.run(cmd, capture_output=True, text=True, env=env)
         if res.returncode != 0:
             raise SystemExit(res.stderr[-3000:])
         result = json.loads(out.read_text())
