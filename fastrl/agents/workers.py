@@ -49,7 +49,7 @@ def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int, spi
     It ignores SIGINT and SIGTERM (a Ctrl-C reaches the whole process group; the parent decides and then closes
     the pipe) and ends when the pipe closes, so it never outlives its parent. The parent's ends of the pipes,
     inherited by the fork, are closed first: else the pipe would never read as closed. It polls for each command
-    for `spin` seconds before it sleeps (each step command says how long for the next).
+    for `spin` seconds before it sleeps.
     """
     forked.child_signals(term=signal.SIG_IGN)
     forked.close_ends(parent_ends)
@@ -58,8 +58,7 @@ def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int, spi
         while True:
             command, arg = recv_soon(conn, spin)
             if command == "step":
-                actions, spin = arg
-                venv.step_async(actions)
+                venv.step_async(arg)
                 conn.send(venv.step_wait())
             elif command == "reset":
                 venv._seeds, venv._options = arg
@@ -89,9 +88,8 @@ class SplitVecEnv(VecEnv):
     Env i behaves as env i of a FreshInfoVecEnv of the same envs (same seeds, same order of results), so the
     split changes the speed, never the trajectories. Workers are forked daemons that ignore Ctrl-C and SIGTERM
     and exit when the pipe to this process closes. The processes poll for each other's messages before they sleep
-    (`recv_soon`), except while work at the lowest priority runs beside them: the CPU time they would poll away
-    is its (`fastrl run`'s scripted expert: 2.5 s later to the final evaluation, 0.7 s sooner training); once it
-    is done, they poll again.
+    (`recv_soon`), unless they start while work at the lowest priority runs beside them: the CPU time they would
+    poll away is its (`fastrl run`'s scripted expert: 2.5 s later to the final evaluation, 0.7 s sooner training).
     """
 
     def __init__(self, *, make_env: Callable[[], gym.Env], n_envs: int, processes: int, fork: bool = True):
@@ -101,7 +99,7 @@ class SplitVecEnv(VecEnv):
         self.local = FreshInfoVecEnv([make_env for _ in range(batches[0])])
         ctx = forked.context(fork)
         self.batches, self.pipes, self.procs = batches, [], []
-        self.spin = self._spin()
+        self.spin = 0.0 if forked.idle_work_running() else SPIN
         for n in batches[1:]:
             parent, child = ctx.Pipe()
             ends = [*self.pipes, parent] if ctx.get_start_method() == "fork" else []
@@ -126,17 +124,11 @@ class SplitVecEnv(VecEnv):
             pipe.send((command, arg))
         return [pipe.recv() for pipe in self.pipes]
 
-    @staticmethod
-    def _spin() -> float:
-        """How long the processes poll for a message before they sleep: not while idle work wants the CPU."""
-        return 0.0 if forked.idle_work_running() else SPIN
-
     def step_async(self, actions: np.ndarray) -> None:
         """Hand each worker its actions; this process steps its own batch in step_wait meanwhile."""
         parts = self._slices()
-        self.spin = self._spin()
         for pipe, part in zip(self.pipes, parts[1:]):
-            pipe.send(("step", (actions[part], self.spin)))
+            pipe.send(("step", actions[part]))
         self.waiting = True
         self.local.step_async(actions[parts[0]])
 

@@ -50,9 +50,6 @@ def test_env_workers_leave_the_cpu_they_would_poll_away_to_idle_work_beside():
     busy.cancel()
     try:
         assert [v.venv.spin for v in venvs] == [0.0, SPIN] and SPIN > 0
-        venvs[0].reset()
-        venvs[0].step(np.zeros((2,), np.int64))  # the idle work is done: the venv started beside it polls again
-        assert venvs[0].venv.spin == SPIN
     finally:
         for v in venvs:
             v.close()
