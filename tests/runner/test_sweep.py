@@ -26,13 +26,18 @@ def sets(extra=()):
 
 
 @pytest.fixture(scope="module")
-def cluster():
-    """A real Ray cluster of two nodes (one CPU each) on this machine, as `--address` targets."""
+def cluster(tmp_path_factory):
+    """A real Ray cluster of two nodes (one CPU each) on this machine, as `--address` targets. Its processes get
+    a cache of their own: each trial evaluates the scripted expert (3 s), as on a new machine, so a sweep's two
+    trials overlap in time; with the expert remembered by earlier tests, one could end before the other started
+    and both ran on one node."""
     from ray.cluster_utils import Cluster
 
-    c = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "include_dashboard": False})
-    c.add_node(num_cpus=1)
-    c.wait_for_nodes()
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("FASTRL_CACHE", str(tmp_path_factory.mktemp("cluster-cache")))  # inherited by the raylets
+        c = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "include_dashboard": False})
+        c.add_node(num_cpus=1)
+        c.wait_for_nodes()
     yield c
     if ray.is_initialized():
         ray.shutdown()
