@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import signal
 import time
 from collections.abc import Callable
@@ -11,6 +12,7 @@ import numpy as np
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
 
 from .. import forked
+from .lanes import Lane
 
 
 class FreshInfoVecEnv(DummyVecEnv):
@@ -43,20 +45,32 @@ def recv_soon(conn, spin: float = SPIN):
     return conn.recv()
 
 
-def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int, spin: float) -> None:
+def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int, spin: float, lane: Lane | None) -> None:
     """A worker's loop: step, reset and query its batch of envs on the parent's commands until told to stop.
 
     It ignores SIGINT and SIGTERM (a Ctrl-C reaches the whole process group; the parent decides and then closes
     the pipe) and ends when the pipe closes, so it never outlives its parent. The parent's ends of the pipes,
     inherited by the fork, are closed first: else the pipe would never read as closed. It polls for each command
-    for `spin` seconds before it sleeps.
+    for `spin` seconds before it sleeps. With a `lane`, steps come and go through shared memory, other commands
+    by the pipe, and it ends as soon as its parent does.
     """
     forked.child_signals(term=signal.SIG_IGN)
     forked.close_ends(parent_ends)
     venv = FreshInfoVecEnv([make_env for _ in range(n)])
+    parent = os.getppid()
     try:
         while True:
-            command, arg = recv_soon(conn, spin)
+            if lane is not None:
+                step = lane.next_is_step(spin, lambda: os.getppid() == parent)
+                if step is None:
+                    break
+                if step:
+                    venv.step_async(lane.actions.copy())
+                    lane.put(venv.step_wait(), conn)
+                    continue
+                command, arg = conn.recv()
+            else:
+                command, arg = recv_soon(conn, spin)
             if command == "step":
                 venv.step_async(arg)
                 conn.send(venv.step_wait())
@@ -100,10 +114,15 @@ class SplitVecEnv(VecEnv):
         ctx = forked.context(fork)
         self.batches, self.pipes, self.procs = batches, [], []
         self.spin = 0.0 if forked.idle_work_running() else SPIN
-        for n in batches[1:]:
+        space = self.local.observation_space
+        # shared memory where a forked child inherits it and the observations are one array (no Dict of images)
+        shared = ctx.get_start_method() == "fork" and isinstance(space, gym.spaces.Box)
+        self.lanes = [Lane(ctx=ctx, n=n, obs_space=space, action_space=self.local.action_space) for n in batches[1:]]
+        self.lanes = self.lanes if shared else None
+        for i, n in enumerate(batches[1:]):
             parent, child = ctx.Pipe()
             ends = [*self.pipes, parent] if ctx.get_start_method() == "fork" else []
-            args = (child, ends, make_env, n, self.spin)
+            args = (child, ends, make_env, n, self.spin, self.lanes[i] if self.lanes else None)
             proc = ctx.Process(target=_serve, args=args, daemon=True, name="fastrl-envs")
             forked.start(proc)
             child.close()
@@ -118,24 +137,36 @@ class SplitVecEnv(VecEnv):
         ends = np.cumsum(self.batches)
         return [slice(int(e - n), int(e)) for n, e in zip(self.batches, ends)]
 
+    def _send(self, i: int, message: tuple) -> None:
+        """A command to worker i by its pipe (announced in its lane, if it has one)."""
+        self.pipes[i].send(message)
+        if self.lanes:
+            self.lanes[i].post_command()
+
     def _ask(self, command: str, arg=None) -> list:
         """Send one command to every worker and collect their answers, in order."""
-        for pipe in self.pipes:
-            pipe.send((command, arg))
+        for i in range(len(self.pipes)):
+            self._send(i, (command, arg))
         return [pipe.recv() for pipe in self.pipes]
 
     def step_async(self, actions: np.ndarray) -> None:
         """Hand each worker its actions; this process steps its own batch in step_wait meanwhile."""
         parts = self._slices()
-        for pipe, part in zip(self.pipes, parts[1:]):
-            pipe.send(("step", actions[part]))
+        for i, part in enumerate(parts[1:]):
+            if self.lanes:
+                self.lanes[i].post_step(actions[part])
+            else:
+                self.pipes[i].send(("step", actions[part]))
         self.waiting = True
         self.local.step_async(actions[parts[0]])
 
     def step_wait(self):
         """Step this process's batch, then gather the workers' results."""
         results = [self.local.step_wait()]
-        results += [recv_soon(pipe, self.spin) for pipe in self.pipes]
+        if self.lanes:
+            results += [lane.take(self.spin, p.is_alive, c) for lane, p, c in zip(self.lanes, self.procs, self.pipes)]
+        else:
+            results += [recv_soon(pipe, self.spin) for pipe in self.pipes]
         self.waiting = False
         obs, rews, dones, infos = zip(*results)
         return np.concatenate(obs), np.concatenate(rews), np.concatenate(dones), [i for part in infos for i in part]
@@ -143,8 +174,8 @@ class SplitVecEnv(VecEnv):
     def reset(self):
         """Reset every env with the pending seeds and options."""
         parts = self._slices()
-        for pipe, part in zip(self.pipes, parts[1:]):
-            pipe.send(("reset", (self._seeds[part], self._options[part])))
+        for i, part in enumerate(parts[1:]):
+            self._send(i, ("reset", (self._seeds[part], self._options[part])))
         self.local._seeds, self.local._options = self._seeds[parts[0]], self._options[parts[0]]
         obs = [self.local.reset()]
         infos = [self.local.reset_infos]
@@ -162,11 +193,14 @@ class SplitVecEnv(VecEnv):
         if self.closed:
             return
         self.closed = True
-        for pipe in self.pipes:
+        for i, pipe in enumerate(self.pipes):
             try:
-                if self.waiting and pipe.poll(10):  # a step stopped by Ctrl-C: its answer, before the command
-                    pipe.recv()
-                pipe.send(("close", None))
+                if self.waiting:  # a step stopped by Ctrl-C: its answer, before the command
+                    if self.lanes:
+                        self.lanes[i].done.acquire(timeout=10)
+                    elif pipe.poll(10):
+                        pipe.recv()
+                self._send(i, ("close", None))
             except (EOFError, BrokenPipeError, ConnectionResetError):
                 pass
             pipe.close()
@@ -188,8 +222,8 @@ class SplitVecEnv(VecEnv):
             return []
         picked = self._split(indices)
         out = self.local.get_attr(attr_name, picked[0])
-        for pipe, local in zip(self.pipes, picked[1:]):
-            pipe.send(("get_attr", attr_name))
+        for i, (pipe, local) in enumerate(zip(self.pipes, picked[1:])):
+            self._send(i, ("get_attr", attr_name))
             values = pipe.recv()
             out += [values[i] for i in local]
         return out
@@ -198,18 +232,18 @@ class SplitVecEnv(VecEnv):
         """Set an attribute on each env."""
         picked = self._split(indices)
         self.local.set_attr(attr_name, value, picked[0])
-        for pipe, local in zip(self.pipes, picked[1:]):
+        for i, (pipe, local) in enumerate(zip(self.pipes, picked[1:])):
             if local:
-                pipe.send(("set_attr", (attr_name, value, local)))
+                self._send(i, ("set_attr", (attr_name, value, local)))
                 pipe.recv()
 
     def env_method(self, method_name: str, *method_args, indices=None, **method_kwargs) -> list:
         """Call a method of each env."""
         picked = self._split(indices)
         out = self.local.env_method(method_name, *method_args, indices=picked[0], **method_kwargs)
-        for pipe, local in zip(self.pipes, picked[1:]):
+        for i, (pipe, local) in enumerate(zip(self.pipes, picked[1:])):
             if local:
-                pipe.send(("env_method", (method_name, method_args, {**method_kwargs, "indices": local})))
+                self._send(i, ("env_method", (method_name, method_args, {**method_kwargs, "indices": local})))
                 out += pipe.recv()
         return out
 
@@ -217,8 +251,8 @@ class SplitVecEnv(VecEnv):
         """Whether each env is wrapped by the class."""
         picked = self._split(indices)
         out = self.local.env_is_wrapped(wrapper_class, picked[0])
-        for pipe, local in zip(self.pipes, picked[1:]):
-            pipe.send(("env_is_wrapped", wrapper_class))
+        for i, (pipe, local) in enumerate(zip(self.pipes, picked[1:])):
+            self._send(i, ("env_is_wrapped", wrapper_class))
             values = pipe.recv()
             out += [values[i] for i in local]
         return out

@@ -13,6 +13,7 @@ import numpy as np
 import psutil
 import torch
 
+from fastrl.agents import lanes
 from fastrl.agents.sb3 import batch_policy, build_model, make_vec_env
 from fastrl.agents.workers import FreshInfoVecEnv, SplitVecEnv, recv_soon
 from fastrl.env.fast_env import FastEnv
@@ -56,6 +57,43 @@ def test_split_env_steps_exactly_as_the_in_process_one():
         single.close()
         split.close()
     assert not any(p.is_alive() for p in split.venv.procs)
+
+
+def test_infos_too_large_for_shared_memory_come_by_the_pipe_with_the_same_steps(monkeypatch):
+    spec = load_spec(spec_file("tracelines"), ["episode.time_limit=2"])
+    single = make_vec_env(spec, 4, 3, workers=1)
+    monkeypatch.setattr(lanes, "INFO_BYTES", 64)  # before the fork: the worker's infos never fit
+    split = make_vec_env(spec, 4, 3, workers=2)
+    try:
+        assert split.venv.lanes and split.venv.lanes[0].info.size == 64
+        for x, y in zip(rollout(single, 60, 1), rollout(split, 60, 1)):
+            assert str(x) == str(y)
+    finally:
+        single.close()
+        split.close()
+
+
+ORPHAN = """
+import os, signal, sys
+import numpy as np
+from fastrl.agents.sb3 import make_vec_env
+from fastrl.spec import load_spec
+venv = make_vec_env(load_spec(sys.argv[1]), 4, 0, workers=2)
+venv.reset()
+venv.step(np.zeros(4, np.int64))
+print(venv.venv.procs[0].pid, flush=True)
+os.kill(os.getpid(), signal.SIGKILL)  # no close, no pipe end closed by an exit handler
+"""
+
+
+def test_a_worker_ends_soon_after_its_parent_is_killed():
+    res = subprocess.run([sys.executable, "-c", ORPHAN, str(spec_file("tracelines"))], capture_output=True, text=True)
+    assert res.returncode == -signal.SIGKILL, res.stderr
+    worker = int(res.stdout.split()[-1])
+    deadline = time.time() + 5
+    while psutil.pid_exists(worker) and psutil.Process(worker).status() != psutil.STATUS_ZOMBIE:
+        assert time.time() < deadline, "the env worker outlived its parent"
+        time.sleep(0.05)
 
 
 def trained_weights(workers: int) -> tuple[dict, dict]:
