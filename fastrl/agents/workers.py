@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import time
 from collections.abc import Callable
 
@@ -45,23 +46,33 @@ def recv_soon(conn, spin: float = SPIN):
     return conn.recv()
 
 
+def _closed(peer: socket.socket) -> bool:
+    """Whether the parent's end of the pipe is closed (its SplitVecEnv collected, or the parent gone), unread."""
+    try:
+        return peer.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) == b""
+    except BlockingIOError:
+        return False
+    except OSError:
+        return True
+
+
 def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int, spin: float, lane: Lane | None) -> None:
     """A worker's loop: step, reset and query its batch of envs on the parent's commands until told to stop.
 
     It ignores SIGINT and SIGTERM (a Ctrl-C reaches the whole process group; the parent decides and then closes
     the pipe) and ends when the pipe closes, so it never outlives its parent. The parent's ends of the pipes,
     inherited by the fork, are closed first: else the pipe would never read as closed. It polls for each command
-    for `spin` seconds before it sleeps. With a `lane`, steps come and go through shared memory, other commands
-    by the pipe, and it ends as soon as its parent does.
+    for `spin` seconds before it sleeps. With a `lane`, steps come and go through shared memory and other commands
+    by the pipe; asleep, it looks every WATCH_SECONDS whether the pipe was closed or its parent is gone.
     """
     forked.child_signals(term=signal.SIG_IGN)
     forked.close_ends(parent_ends)
     venv = FreshInfoVecEnv([make_env for _ in range(n)])
-    parent = os.getppid()
+    parent, peer = os.getppid(), socket.fromfd(conn.fileno(), socket.AF_UNIX, socket.SOCK_STREAM)
     try:
         while True:
             if lane is not None:
-                step = lane.next_is_step(spin, lambda: os.getppid() == parent)
+                step = lane.next_is_step(spin, lambda: os.getppid() == parent and not _closed(peer))
                 if step is None:
                     break
                 if step:
@@ -94,6 +105,7 @@ def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int, spi
     finally:
         venv.close()
         conn.close()
+        peer.close()
 
 
 class SplitVecEnv(VecEnv):

@@ -1,5 +1,6 @@
 """Envs split across worker processes: the same trajectories and weights as in one process, clean stops."""
 
+import gc
 import json
 import multiprocessing as mp
 import os
@@ -94,6 +95,19 @@ def test_a_worker_ends_soon_after_its_parent_is_killed():
     while psutil.pid_exists(worker) and psutil.Process(worker).status() != psutil.STATUS_ZOMBIE:
         assert time.time() < deadline, "the env worker outlived its parent"
         time.sleep(0.05)
+
+
+def test_a_worker_ends_once_its_env_is_dropped_unclosed():
+    venv = make_vec_env(load_spec(spec_file("tracelines")), 4, 0, workers=2)
+    venv.reset()
+    (worker,) = venv.venv.procs
+    del venv
+    gc.collect()  # the pipe's end here closes with it
+    worker.join(timeout=5)
+    alive = worker.is_alive()
+    if alive:
+        worker.kill()  # else this test process would wait for it at exit
+    assert not alive, "the env worker outlived the env it served"
 
 
 def trained_weights(workers: int) -> tuple[dict, dict]:
