@@ -68,7 +68,8 @@ def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int, spi
     forked.child_signals(term=signal.SIG_IGN)
     forked.close_ends(parent_ends)
     venv = FreshInfoVecEnv([make_env for _ in range(n)])
-    parent, peer = os.getppid(), socket.fromfd(conn.fileno(), socket.AF_UNIX, socket.SOCK_STREAM)
+    parent = os.getppid()
+    peer = socket.fromfd(conn.fileno(), socket.AF_UNIX, socket.SOCK_STREAM) if lane is not None else None
     try:
         while True:
             if lane is not None:
@@ -105,7 +106,8 @@ def _serve(conn, parent_ends: list, make_env: Callable[[], gym.Env], n: int, spi
     finally:
         venv.close()
         conn.close()
-        peer.close()
+        if peer is not None:
+            peer.close()
 
 
 class SplitVecEnv(VecEnv):
@@ -126,11 +128,10 @@ class SplitVecEnv(VecEnv):
         ctx = forked.context(fork)
         self.batches, self.pipes, self.procs = batches, [], []
         self.spin = 0.0 if forked.idle_work_running() else SPIN
-        space = self.local.observation_space
-        # shared memory where a forked child inherits it and the observations are one array (no Dict of images)
-        shared = ctx.get_start_method() == "fork" and isinstance(space, gym.spaces.Box)
-        self.lanes = [Lane(ctx=ctx, n=n, obs_space=space, action_space=self.local.action_space) for n in batches[1:]]
-        self.lanes = self.lanes if shared else None
+        space, actions = self.local.observation_space, self.local.action_space
+        self.lanes = None  # shared memory where a forked child inherits it and the observations are one array
+        if ctx.get_start_method() == "fork" and isinstance(space, gym.spaces.Box):
+            self.lanes = [Lane(ctx=ctx, n=n, obs_space=space, action_space=actions) for n in batches[1:]]
         for i, n in enumerate(batches[1:]):
             parent, child = ctx.Pipe()
             ends = [*self.pipes, parent] if ctx.get_start_method() == "fork" else []
