@@ -1,6 +1,7 @@
 """The scripted expert's evaluation, computed once per spec, seeds and code on a machine, then recalled."""
 
 import json
+import os
 
 import pytest
 
@@ -57,3 +58,16 @@ def test_a_damaged_memo_is_computed_again_and_an_unwritable_cache_costs_nothing(
     monkeypatch.setenv("FASTRL_CACHE", str(blocked))
     assert expert_summary(spec, seeds) == first
     assert expert_memo.recall(spec, seeds) is None
+
+
+def test_the_cache_keeps_the_newest_memos(cache, monkeypatch):
+    spec = load_spec("specs/tracelines.yaml", TWO)
+    folder = cache / "expert"
+    folder.mkdir()
+    for i in range(5):
+        (folder / f"old{i}.json").write_text("{}")
+        os.utime(folder / f"old{i}.json", (1e9 + i, 1e9 + i))  # 2001, old4 the newest of them
+    monkeypatch.setattr(expert_memo, "KEPT", 3)
+    expert_memo.remember(spec, evaluation_seeds(spec), {"success_rate": 1.0})
+    kept = sorted(p.name for p in folder.glob("*.json"))
+    assert kept == sorted([expert_memo.memo_path(spec, evaluation_seeds(spec)).name, "old3.json", "old4.json"])

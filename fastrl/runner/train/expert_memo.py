@@ -11,6 +11,7 @@ from ...atomic import write_json
 from ...cache import cache_dir
 
 NOT_ITS = {"name", "description", "train", "irl", "study"}  # what the expert's episodes do not depend on
+KEPT = 256  # memos kept, the newest: every edit of fastrl's sources makes new keys
 
 
 @functools.cache
@@ -50,5 +51,8 @@ def remember(spec, seeds: list[int], summary: dict) -> None:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         write_json(path, summary)
+        memos = sorted(path.parent.glob("*.json"), key=lambda p: p.stat().st_mtime, reverse=True)
+        for old in memos[KEPT:]:
+            old.unlink(missing_ok=True)
     except OSError:
         pass
