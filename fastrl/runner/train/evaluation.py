@@ -103,18 +103,20 @@ def expert_beside(spec: TaskSpec, *, idle: bool = False) -> Beside | None:
     known = recall(spec, seeds)
     if known is not None:
         return Beside.ready(known)
-    return Beside(lambda: expert_summary(spec, seeds), fork=spec.train.workers > 1, idle=idle)
+    return Beside(lambda: computed_expert_summary(spec, seeds), fork=spec.train.workers > 1, idle=idle)
 
 
 def expert_summary(spec: TaskSpec, seeds: list[int]) -> dict:
-    """The scripted expert's evaluation figures on the given seeds (no images, no recording).
+    """The scripted expert's evaluation figures on the given seeds (no images, no recording): computed once per
+    spec, seeds and code on this machine, then recalled (3 s of CPU on TraceLines, beside a run's training)."""
+    return recall(spec, seeds) or computed_expert_summary(spec, seeds)
+
+
+def computed_expert_summary(spec: TaskSpec, seeds: list[int]) -> dict:
+    """expert_summary's figures computed, and remembered for the next time.
 
     The expert acts on the task's state, so it goes without image observations: rendering in a child forked
-    after this process rendered (the evaluation during training) would deadlock in Mesa's EGL. Computed once per
-    spec, seeds and code on this machine, then recalled (3 s of CPU on TraceLines, beside a run's training)."""
-    known = recall(spec, seeds)
-    if known is not None:
-        return known
+    after this process rendered (the evaluation during training) would deadlock in Mesa's EGL."""
     env = FastEnv(without_images(spec))
     expert = ScriptedExpert(env)
     summary, _ = evaluate(env, expert.act, seeds, on_reset=expert.reset)
