@@ -86,5 +86,6 @@ class Lane:
         if not acquire(self.done, spin, alive):
             raise EOFError("an env worker process ended")
         n = int(self.head[1])
+        # written by our own forked worker into memory only it and this process map: what the pipe's recv unpickles
         infos = pickle.loads(self.info[:n]) if n >= 0 else conn.recv()
         return self.obs.copy(), self.rews.copy(), self.dones.copy(), infos
