@@ -1,10 +1,18 @@
-"""Whether a checkpoint directory is whole, answered without importing torch (`fastrl score` checks runs)."""
+"""Whether a checkpoint directory is whole, and the errors of a bad one, without torch (`fastrl score` checks runs)."""
 
 from __future__ import annotations
 
 import hashlib
 import json
 from pathlib import Path
+
+
+class CheckpointMismatch(ValueError):
+    """A checkpoint whose tensors do not fit the model the run's spec builds."""
+
+
+class CheckpointDamaged(ValueError):
+    """A checkpoint directory with missing, torn or damaged files."""
 
 
 def file_sha256(path: Path) -> str:

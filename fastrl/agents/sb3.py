@@ -21,7 +21,7 @@ from ..env.fast_env import FastEnv
 from ..spec.columns import value_inputs
 from ..spec.models import TaskSpec
 from ..spec.training import Encoder
-from .checkpoint_files import checkpoint_problem, file_sha256
+from .checkpoint_files import CheckpointDamaged, CheckpointMismatch, checkpoint_problem, file_sha256
 from .critic_columns import ColumnCriticPolicy
 from .eager_adam import EagerAdam
 from .encoder import PixelEncoder
@@ -152,14 +152,6 @@ def save_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv, state: dict,
         raise
     fsync_dir(path.parent)
     return path
-
-
-class CheckpointMismatch(ValueError):
-    """A checkpoint whose tensors do not fit the model the run's spec builds."""
-
-
-class CheckpointDamaged(ValueError):
-    """A checkpoint directory with missing, torn or damaged files."""
 
 
 def load_checkpoint(path: Path, model: BaseAlgorithm, venv: VecEnv | None, parts: dict | None = None) -> dict:

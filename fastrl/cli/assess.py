@@ -47,7 +47,7 @@ def assess_cohort(
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
 ) -> None:
     """Rank recordings, learn reward, value and policy from the best K without their actions, score them all."""
-    from ..agents.sb3 import CheckpointMismatch
+    from ..agents.checkpoint_files import CheckpointMismatch
     from ..atomic import DiskFull
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
     from ..runner.protocol import DEFAULT_BY, run_protocol

@@ -16,14 +16,15 @@ def train_and_report(
     spec: Path | None, overrides: list[str], resume: Path | None, runs: Path, progress: bool, timesteps: int | None
 ) -> None:
     """Start (or resume) a run or study, turn interruptions and bad input into messages, print the evaluation."""
-    from ..agents.sb3 import CheckpointDamaged, CheckpointMismatch
+    from ..agents.checkpoint_files import CheckpointDamaged, CheckpointMismatch
     from ..atomic import DiskFull
-    from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
+    from ..forked import deferred
     from ..runner.runs.runfiles import RunFileError, read_eval
-    from ..runner.runs.stops import stop_on_sigterm
-    from ..runner.train.training import plan_training, train
+    from ..runner.runs.stops import EvaluationInterrupted, RunInterrupted, RunOutOfSpace, stop_on_sigterm
+    from ..runner.train.training import expert_started, plan_training, train
     from .stops import report_stop
 
+    expert = None
     with stop_on_sigterm(until_exit=True):  # a second Ctrl-C while the run saves is ignored until exit
         try:
             plan = plan_training(spec, overrides, resume)
@@ -31,11 +32,16 @@ def train_and_report(
                 from .study import study_and_report
 
                 return study_and_report(plan, runs, progress)
-            run_dir = train(plan, runs, out, progress, timesteps)
+            with deferred():  # kept in `expert` before a stop can land
+                expert = expert_started(plan)
+            run_dir = train(plan, runs, out, progress, timesteps, expert=expert)
         except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
             report_stop(stop)
         except (SpecError, FileNotFoundError, CheckpointMismatch, CheckpointDamaged, RunFileError) as e:
             exit_with(e)
+        finally:
+            if expert is not None:
+                expert.cancel()
     print_eval(read_eval(run_dir))
     from ..runner.train.advice import learning_advice
 

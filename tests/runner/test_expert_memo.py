@@ -2,11 +2,13 @@
 
 import json
 import os
+import subprocess
+import sys
 
 import pytest
 
-from fastrl.runner.train import evaluation, expert_memo
-from fastrl.runner.train.evaluation import evaluation_seeds, expert_beside, expert_summary
+from fastrl.runner.train import expert_eval, expert_memo
+from fastrl.runner.train.expert_eval import evaluation_seeds, expert_beside, expert_summary
 from fastrl.spec import load_spec
 
 TWO = ["evaluate.episodes=2", "evaluate.record_episodes=0"]
@@ -27,7 +29,7 @@ def test_the_second_evaluation_is_recalled_equal_without_running_the_expert(cach
     seeds = evaluation_seeds(spec)
     first = expert_summary(spec, seeds)
     assert first["subtasks_completed"] == 1.0 and len(first["per_episode"]) == 2
-    monkeypatch.setattr(evaluation, "ScriptedExpert", no_expert)
+    monkeypatch.setattr(expert_eval, "ScriptedExpert", no_expert)
     assert expert_summary(spec, seeds) == first
     job = expert_beside(spec, idle=True)
     assert job.done() and job.child is None and job.result() == first
@@ -71,3 +73,41 @@ def test_the_cache_keeps_the_newest_memos(cache, monkeypatch):
     expert_memo.remember(spec, evaluation_seeds(spec), {"success_rate": 1.0})
     kept = sorted(p.name for p in folder.glob("*.json"))
     assert kept == sorted([expert_memo.memo_path(spec, evaluation_seeds(spec)).name, "old3.json", "old4.json"])
+
+
+EARLY_START = """
+import json, sys
+from fastrl.cli import app
+from fastrl.runner.train import expert_eval
+
+calls = []
+real = expert_eval.expert_beside
+
+
+def spy(spec, **kwargs):
+    calls.append(sorted(m for m in ("torch", "rerun", "stable_baselines3") if m in sys.modules))
+    job = real(spec, **kwargs)
+    calls.append(job.child is not None)
+    return job
+
+
+expert_eval.expert_beside = spy
+sys.argv = ["fastrl", "run", "specs/tracelines.yaml", "--runs", sys.argv[1], "--no-progress", "--set",
+            "train.timesteps=64", "--set", "evaluate.episodes=2", "--set", "evaluate.record_episodes=0"]
+try:
+    app()
+except SystemExit as stop:
+    assert not stop.code, stop.code
+print(json.dumps(calls))
+"""
+
+
+def test_a_run_starts_the_experts_evaluation_before_torch_and_rerun_load(cache, tmp_path):
+    env = os.environ | {"FASTRL_CACHE": str(cache)}
+    res = subprocess.run(
+        [sys.executable, "-c", EARLY_START, str(tmp_path / "runs")], capture_output=True, text=True, env=env
+    )
+    assert res.returncode == 0, res.stderr
+    assert json.loads(res.stdout.splitlines()[-1]) == [[], True]  # once, forked, before the heavy imports
+    (eval_json,) = (tmp_path / "runs").glob("*/*/eval.json")
+    assert json.loads(eval_json.read_text())["expert"]["subtasks_completed"] == 1.0

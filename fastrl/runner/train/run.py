@@ -48,10 +48,12 @@ def start_run(
     progress: bool = True,
     into: Path | None = None,
     task: CompiledTask | None = None,
+    expert: Beside | None = None,
 ) -> Path:
     """Train, evaluate and record a new run of a spec file (in `into` if given); return its directory.
 
-    `task`: the spec file with these overrides, compiled already (so it is not compiled again)."""
+    `task`: the spec file with these overrides, compiled already (so it is not compiled again); `expert`: the
+    scripted expert's evaluation of this spec, started already (expert_beside)."""
     if task is None:
         task = compile_task(load_spec(spec_path, overrides))
     spec = task.spec
@@ -61,7 +63,7 @@ def start_run(
     write_spec(run, spec, task.xml)
     write_meta(run, spec, str(spec_path), {"status": "training", "overrides": list(overrides)})
     with stop_on_sigterm():
-        return _train_and_evaluate(run, spec, task, None, console or Console(), progress)
+        return _train_and_evaluate(run, spec, task, None, console or Console(), progress, expert=expert)
 
 
 def resume_run(run: Path, console: Console | None = None, progress: bool = True, timesteps: int | None = None) -> Path:
@@ -135,13 +137,15 @@ def _train_and_evaluate(
     console: Console,
     progress: bool,
     resuming: bool = False,
+    expert: Beside | None = None,
 ) -> Path:
     """Train (from a checkpoint if given), save, evaluate agent and expert, write eval.json and the recording. The
-    expert's evaluation starts first, beside training at the lowest priority: on the CPU time training leaves."""
+    expert's evaluation starts first (unless `expert` started it already), beside training at the lowest priority:
+    on the CPU time training leaves."""
     with ExitStack() as jobs:  # the expert's evaluation, once started, is stopped whichever way the run ends
         try:
             with deferred():  # its cancel registered before a stop can land
-                expert = expert_beside(spec, idle=True)
+                expert = expert or expert_beside(spec, idle=True)
                 if expert is not None:
                     jobs.callback(_cancel, expert)
             learner = build_learner(spec, run, console, progress)

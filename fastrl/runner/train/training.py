@@ -10,6 +10,7 @@ from rich.console import Console
 from ...model.compiler import CompiledTask
 from ...model.loaded import load_task
 from ..runs.runfiles import STUDY_KIND, STUDY_RESULT, read_meta
+from .beside import Beside
 
 
 @dataclass(frozen=True)
@@ -36,8 +37,26 @@ def plan_training(spec_path: Path | None, overrides=(), resume: Path | None = No
     return Training(Path(spec_path), tuple(overrides), None, task, task.spec.study.enabled)
 
 
-def train(plan: Training, runs: Path, console: Console, progress: bool = True, timesteps: int | None = None) -> Path:
-    """Start or continue the planned run or study; return its directory."""
+def expert_started(plan: Training) -> Beside | None:
+    """A new run's scripted-expert evaluation, recalled or started now at the lowest priority: before torch and
+    Rerun import (2 s of a free CPU on a spec's first run). None for a resume, a study or a spec without it."""
+    if plan.task is None or plan.study:
+        return None
+    from .expert_eval import expert_beside  # here: planning a resume or a study needs no expert
+
+    return expert_beside(plan.task.spec, idle=True)
+
+
+def train(
+    plan: Training,
+    runs: Path,
+    console: Console,
+    progress: bool = True,
+    timesteps: int | None = None,
+    *,
+    expert: Beside | None = None,
+) -> Path:
+    """Start or continue the planned run or study; return its directory. `expert`: a new run's expert_started."""
     if plan.study:
         from ..study import run_study, start_study
 
@@ -48,4 +67,4 @@ def train(plan: Training, runs: Path, console: Console, progress: bool = True, t
 
     if plan.resume is not None:
         return resume_run(plan.resume, console, progress, timesteps)
-    return start_run(plan.spec_path, list(plan.overrides), runs, console, progress, task=plan.task)
+    return start_run(plan.spec_path, list(plan.overrides), runs, console, progress, task=plan.task, expert=expert)
