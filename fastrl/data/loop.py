@@ -20,18 +20,19 @@ def episode_steps(
     on_reset: Callable | None = None,
     instruments: np.ndarray | None = None,
     bodies: np.ndarray | None = None,
+    read_past: bool = False,
 ) -> Iterator[tuple[np.ndarray, float, dict, object]]:
     """Yield (observation, reward, info, action) at the reset state (reward 0, action None) and after each step.
 
     With `policy` (observation -> action) the env steps until the episode terminates or is truncated; else the
     recorded `portal` coordinates are replayed (the first is the reset pose) until the task terminates or they end,
-    with the `instruments`' coordinates and the loose `bodies`' poses beside them where recorded.
-    `on_reset()` is called right after the reset."""
+    with the `instruments`' coordinates and the loose `bodies`' poses beside them where recorded; `read_past`:
+    measured poses, read with Task.read_past. `on_reset()` is called right after the reset."""
     u = env.unwrapped
     if policy is not None:
         obs, info = env.reset(seed=seed)
     else:
-        options = {"portal": portal[0]}
+        options = {"portal": portal[0], "read_past": read_past}
         if instruments is not None:
             options["instruments"] = instruments[0]
         if bodies is not None:

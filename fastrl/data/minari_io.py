@@ -42,11 +42,12 @@ def episode_buffer(env, traj: Trajectory, index: int):
     from minari.data_collector import EpisodeBuffer
 
     from .loop import episode_steps
+    from .replay import measured
 
     observations, rewards, term = [], [], False
     seed = int(traj.meta.get("seed", 0))
     for obs, reward, info, _ in episode_steps(
-        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies
+        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies, read_past=measured(traj)
     ):
         observations.append(obs)
         rewards.append(float(reward))

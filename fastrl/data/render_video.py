@@ -9,7 +9,7 @@ import numpy as np
 from .frames import control_grid, nearest_rows
 from .inverse import to_control_rate
 from .loop import episode_steps
-from .replay import check_ranges
+from .replay import check_ranges, measured
 from .trajectory import Trajectory
 from .video import write_video
 
@@ -21,7 +21,12 @@ def rendered_frames(env, traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
     check_ranges(env, traj)
     u, frames = env.unwrapped, []
     for _ in episode_steps(
-        env, int(traj.meta.get("seed", 0)), portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies
+        env,
+        int(traj.meta.get("seed", 0)),
+        portal=traj.portal,
+        instruments=traj.instruments,
+        bodies=traj.bodies,
+        read_past=measured(traj),
     ):
         frames.append(u.render())
     return traj.time[: len(frames)] - traj.time[0], np.stack(frames)

@@ -64,6 +64,12 @@ def check_ranges(env, traj: Trajectory) -> None:
         raise TrajectoryError(problem)
 
 
+def measured(traj: Trajectory) -> bool:
+    """Whether a trajectory's poses are measurements with an error of their own (read off video frames, imported
+    from a tracker's poses): its replay reads an avatar passed once the next is held (Task.read_past)."""
+    return traj.meta.get("portal_from") == "video" or "imported_from" in traj.meta
+
+
 def replay(env, traj: Trajectory, on_sample: Callable | None = None) -> tuple[np.ndarray, list[dict], np.ndarray]:
     """Observations, infos and rewards of a trajectory, recomputed by placing the scope at each sample.
 
@@ -73,7 +79,7 @@ def replay(env, traj: Trajectory, on_sample: Callable | None = None) -> tuple[np
     observations, infos, rewards = [], [], []
     seed = int(traj.meta.get("seed", 0))
     for obs, reward, info, _ in episode_steps(
-        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies
+        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies, read_past=measured(traj)
     ):
         if on_sample is not None:
             on_sample(env.unwrapped)
@@ -89,7 +95,7 @@ def replay_arrays(env, traj: Trajectory) -> Replayed:
     step."""
     check_ranges(env, traj)
     if can_replay_columns(env):
-        return replay_columns(env, traj.portal, int(traj.meta.get("seed", 0)))
+        return replay_columns(env, traj.portal, int(traj.meta.get("seed", 0)), measured(traj))
     tips = []
     obs, infos, rewards = replay(env, traj, lambda u: tips.append(u.state.tip_pos))
     contacts = np.array([i["contacts"] for i in infos])
@@ -138,7 +144,7 @@ def replay_episode(
     rec = EpisodeRecorder(env, image_every=image_every, image=lambda u: u.render())
     observations = []
     for obs, reward, info, _ in episode_steps(
-        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies
+        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies, read_past=measured(traj)
     ):
         observations.append(obs)
         step = rec.snapshot(float(reward), info)

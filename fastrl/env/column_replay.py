@@ -59,8 +59,9 @@ def can_replay_columns(env) -> bool:
     )
 
 
-def replay_columns(env, portal: np.ndarray, seed: int) -> Replayed:
-    """Replay portal coordinates (n, 5) from the reset with `seed`, as episode_steps would, until the task ends."""
+def replay_columns(env, portal: np.ndarray, seed: int, read_past: bool = False) -> Replayed:
+    """Replay portal coordinates (n, 5) from the reset with `seed`, as episode_steps would, until the task ends
+    (`read_past`: measured poses, read with Task.read_past)."""
     u = env.unwrapped
     q = np.asarray(portal, float)
     bad = np.flatnonzero(~np.isfinite(q).all(axis=1))
@@ -83,7 +84,7 @@ def replay_columns(env, portal: np.ndarray, seed: int) -> Replayed:
     qvel[1:] = (q[1:] - q[:-1]) * k
     cam = {"fwd": -mat[:, [2, 5, 8]], "up": mat[:, [1, 4, 7]], "right": mat[:, [0, 3, 6]]}
     errors = _target_errors(u, pos, cam)
-    cue = _cue_machine(u, errors["green"])
+    cue = _cue_machine(u, errors["green"], read_past)
     end = cue["end"]
     sensor = u.family.sensor
     line = sensor.line_deviations(pos, cam["fwd"]) if sensor.line is not None else np.zeros(len(q))
@@ -179,16 +180,17 @@ def _target_errors(u, pos: np.ndarray, cam: dict) -> dict:
     return out
 
 
-def _cue_machine(u, green: np.ndarray) -> dict:
-    """The cue's dwell, completions and current target at each sample (Task.after_step and next_subtask in turn):
-    the target the reward sees and the one the observation sees after a completion moved it on."""
+def _cue_machine(u, green: np.ndarray, read_past: bool) -> dict:
+    """The cue's dwell, completions and current target at each sample (Task.after_step, read_past and
+    next_subtask in turn): the target the reward sees and the one the observation sees after a completion moved it
+    on. With `read_past`, the next avatar's dwell held while one is current completes both (Task.read_past)."""
     fam = u.family
     n, count, dt = green.shape[1], green.shape[0], fam.dt
     dwells = fam.compiled.targets.dwell.tolist()
     rows = green.tolist()
     stops = bool(u.task_spec.episode.terminations)
     k = done = 0
-    elapsed = dwell = best = 0.0
+    elapsed = ahead = dwell = best = 0.0
     feature_target, feature_dwell, gain, completed = [0], [0.0], [0.0], [False]
     target, seen_dwell = [0], [0.0]
     end = n
@@ -200,12 +202,15 @@ def _cue_machine(u, green: np.ndarray) -> dict:
         gain.append(max(0.0, dwell - best))
         best = max(best, dwell)
         finished = g and elapsed >= need - 1e-9
+        seen = read_past and k + 1 < count and rows[k + 1][t]
+        ahead = ahead + dt if seen else 0.0
+        passed = seen and not finished and ahead >= dwells[k + 1] - 1e-9
         feature_target.append(k)
         feature_dwell.append(dwell)
-        completed.append(finished)
-        if finished:
-            done += 1
-            elapsed = 0.0
+        completed.append(finished or passed)
+        if finished or passed:
+            done += 2 if passed else 1
+            elapsed = ahead = 0.0
             if done < count:
                 k, dwell, best = done, 0.0, 0.0
         target.append(k)

@@ -16,6 +16,7 @@ class InstrumentTask(DomeTask):
     """The dome task with instruments in portals of their own: their actions, sensing, and touch in the cue."""
 
     State = InstrumentState
+    reads_past = False  # green needs an instrument on the target: a replay reads each avatar's own hold
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)

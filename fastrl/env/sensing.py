@@ -104,16 +104,17 @@ class Sensor:
 
     def errors(self, s: TaskState, model, data) -> None:
         """Target-dependent quantities: distance, centring, horizon, rays, potential."""
-        p, t = s.cam_pos, s.target_pos
-        d = (t[0] - p[0], t[1] - p[1], t[2] - p[2])
-        dist = norm(d)
-        s.distance = dist
-        s.centring = math.acos(max(-1.0, min(1.0, dot(d, s.cam_fwd) / max(dist, 1e-9))))
-        u = s.target_up
-        s.horizon = abs(math.atan2(dot(u, s.cam_right), dot(u, s.cam_up)))
+        s.distance, s.centring, s.horizon = view_errors(s, s.target_pos, s.target_up)
         if self.rays:
             s.ray_fraction = self.ray_fraction(model, data, self.ray_points, s.cam_pos, s.cam_fwd)
         s.potential = cue_potential(s)
+
+    def green_on(self, s: TaskState, k: int, pos: tuple, up: tuple) -> bool:
+        """Whether the camera of `s` meets subtask k's tolerances for an avatar at `pos` with `up` (the cue's
+        geometry alone, as cue_checks reads it for the current one)."""
+        t = self.task.targets
+        dist, centring, horizon = view_errors(s, pos, up)
+        return centring <= t.centring[k] and horizon <= t.horizon[k] and t.dist[k, 0] <= dist <= t.dist[k, 1]
 
     def line_deviations(self, pos: np.ndarray, fwd: np.ndarray) -> np.ndarray:
         """_line_deviation at many camera positions and forward vectors, (T, 3) each."""
@@ -147,6 +148,15 @@ class Sensor:
             if hit < 0 or hit >= 1.0 - 1e-3 / n:  # distance in units of |vec|: beyond the point
                 seen += 1
         return seen / len(points)
+
+
+def view_errors(s: TaskState, pos: tuple, up: tuple) -> tuple[float, float, float]:
+    """Distance, centring and horizon error of the camera of `s` on an avatar at `pos` with `up`."""
+    p = s.cam_pos
+    d = (pos[0] - p[0], pos[1] - p[1], pos[2] - p[2])
+    dist = norm(d)
+    centring = math.acos(max(-1.0, min(1.0, dot(d, s.cam_fwd) / max(dist, 1e-9))))
+    return dist, centring, abs(math.atan2(dot(up, s.cam_right), dot(up, s.cam_up)))
 
 
 def avatar_ray_points(size: float, pos: np.ndarray, fwd: np.ndarray, up: np.ndarray) -> list[tuple]:

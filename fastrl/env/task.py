@@ -28,6 +28,7 @@ class Task:
 
     State = TaskState
     loose = None  # the loose bodies of a grasping task
+    reads_past = True  # measured poses may read an avatar passed when the next one is held (green: the view's alone)
 
     def __init__(self, *, compiled: CompiledTask, data: mujoco.MjData, max_steps: int, rays: bool):
         spec, self.compiled, self.model, self.data = compiled.spec, compiled, compiled.model, data
@@ -45,6 +46,7 @@ class Task:
         self.t_pos, self.t_fwd, self.t_up, self.t_quat = t.pos.copy(), t.fwd.copy(), t.up.copy(), t.quat.copy()
         self.target = [0.0] * self.model.nu  # servo targets: the scope's 5 coordinates, then the instruments'
         self.done_count, self.elapsed, self.was_green, self.positions_only = 0, 0.0, False, False
+        self.read_past_now, self.ahead, self.passed = False, 0.0, False  # a replay of measured poses: read_past
         declared = spec.episode
         self.resets = [
             _bound(term, declared.resets[name]) for name, term in RESET_TERMS.items() if name in declared.resets
@@ -68,6 +70,8 @@ class Task:
             apply(start, rng)
         self.episode_targets(start)
         self.done_count, self.elapsed = 0, 0.0
+        self.read_past_now = self.reads_past and bool(options.get("read_past"))
+        self.ahead, self.passed = 0.0, False
         self.place_start(start, options)
         self.actions.reset(self.data, self.compiled.qadr)
         s = self.state
@@ -131,6 +135,23 @@ class Task:
         self.sense(first=False)
         self.was_green = self.state.green
         self.elapsed = update_dwell(self.state, self.elapsed, self.dt)
+        if self.read_past_now:
+            self.read_past()
+
+    def read_past(self) -> None:
+        """Replay of measured poses (read off video frames, imported from a tracker): the next avatar's dwell held
+        while this one is current completes both. Their error can lose a hold the trainee made (the scripted
+        expert's holds lie within a degree of TraceLines' 6 degree cue), and the avatars are ordered: read as the
+        live task reads them, one lost hold loses every avatar after it. Poses given as they were (the simulator's,
+        an agent's, a cohort's) replay by the live task's rule."""
+        s, k = self.state, self.done_count
+        ahead = k + 1 < len(self.t_pos) and self.sensor.green_on(
+            s, k + 1, tuple(self.t_pos[k + 1].tolist()), tuple(self.t_up[k + 1].tolist())
+        )
+        self.ahead = self.ahead + self.dt if ahead else 0.0
+        self.passed = ahead and not s.completed and self.ahead >= self.compiled.targets.dwell[k + 1] - 1e-9
+        if self.passed:
+            s.completed = True
 
     def get_termination(self) -> bool:
         """After the reward: the cue moves on to the next target; then whether a declared termination holds."""
@@ -145,9 +166,9 @@ class Task:
             if s.green != self.was_green:
                 self.paint()
             return
-        self.done_count += 1
+        self.done_count += 2 if self.passed else 1
         s.subtasks_done = self.done_count
-        self.elapsed = 0.0
+        self.elapsed, self.ahead, self.passed = 0.0, 0.0, False
         if self.done_count < len(self.t_pos):
             self.make_current(self.done_count)
         self.paint()
