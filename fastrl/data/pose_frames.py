@@ -78,9 +78,10 @@ def through_codec(rng: np.random.Generator, frames: np.ndarray, hz: float) -> np
         return read_video(path, (w, h)).frames[: len(frames)]
 
 
-def labelled_frames(env, *, episodes: int, seed: int, on_episode=None) -> tuple[np.ndarray, np.ndarray]:
+def labelled_frames(env, *, episodes: int, seed: int, reduce=None, on_episode=None) -> tuple[np.ndarray, np.ndarray]:
     """(N, H, W, 3) uint8 frames and (N, 5) portal coordinates from `episodes` episodes, three in four wandering
-    experts, one in four a sweep; `on_episode()` after each."""
+    experts, one in four a sweep; `reduce(frames)` applied to each episode's frames as they come (so that full-size
+    frames never pile up), `on_episode()` after each."""
     u = env.unwrapped
     hz, ranges = u.task_spec.episode.control_hz, u.task.ranges
     rng = np.random.default_rng(seed)
@@ -92,7 +93,8 @@ def labelled_frames(env, *, episodes: int, seed: int, on_episode=None) -> tuple[
         else:
             portal = sweep(rng, hz, ranges)
         f, q = rendered(env, portal, seed + k)
-        frames.append(through_codec(rng, f, hz))
+        f = through_codec(rng, f, hz)
+        frames.append(f if reduce is None else reduce(f))
         coords.append(q)
         if on_episode is not None:
             on_episode()

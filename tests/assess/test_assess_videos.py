@@ -11,12 +11,12 @@ import fastrl
 from fastrl.cli import app
 from fastrl.data import Trajectory, pose_net, video_poses
 from fastrl.data.cohort import make_cohort
-from fastrl.data.pose_frames import labelled_frames
 from fastrl.data.render_video import write_trajectory_video
 from fastrl.data.video_poses import estimator_name
 from fastrl.runner.score.video_inputs import VIDEO_CENTRING
 from fastrl.spec import load_spec
 
+from ..data.test_video_poses import tiny_estimator
 from ..runner.test_runner import rrd_verify
 
 pytestmark = pytest.mark.slow  # trains end to end
@@ -37,8 +37,7 @@ def videos(tmp_path_factory):
         write_trajectory_video(env, traj, folder / f"{traj.meta['subject']}.mp4")
     (folder / "corrupt.mp4").write_bytes(np.random.default_rng(0).bytes(3000))
     (folder / "empty.mp4").write_bytes(b"")
-    frames, portal = labelled_frames(env, episodes=2, seed=0)
-    est = pose_net.fit(frames, portal, ranges=env.unwrapped.task.ranges, task_hash="t", seed=0, epochs=1)
+    _, _, est = tiny_estimator(env)
     pose_net.save(est, root / "cache" / estimator_name(spec))
     return folder, root / "cache"
 

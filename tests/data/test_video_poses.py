@@ -46,13 +46,18 @@ def test_smoothing_keeps_slow_motion_removes_jitter_and_stays_continuous_across_
     assert np.array_equal(smooth(slow[:3], 20), slow[:3])  # too short to smooth
 
 
+def tiny_estimator(env):
+    """Labelled frames of two episodes of the env's task (64 px) and an estimator fitted to them for one epoch."""
+    frames, portal = labelled_frames(env, episodes=2, seed=0)
+    inputs, ranges = pose_net.downsample(frames), env.unwrapped.task.ranges
+    return frames, portal, pose_net.fit(inputs, portal, size=(64, 64), ranges=ranges, task_hash="t", seed=0, epochs=1)
+
+
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
     """Labelled frames of two TraceLines episodes at 64 px and an estimator fitted to them for one epoch."""
     env = fastrl.make(spec_file("tracelines"), width=64, height=64)
-    frames, portal = labelled_frames(env, episodes=2, seed=0)
-    est = pose_net.fit(frames, portal, ranges=env.unwrapped.task.ranges, task_hash="t", seed=0, epochs=1)
-    return env, frames, portal, est
+    return env, *tiny_estimator(env)
 
 
 def test_labelled_frames_are_deterministic_in_range_and_show_different_views(tiny):
@@ -63,6 +68,9 @@ def test_labelled_frames_are_deterministic_in_range_and_show_different_views(tin
     assert frames.reshape(len(frames), -1).std(axis=0).mean() > 10  # the view changes along the episodes
     again_frames, again_portal = labelled_frames(env, episodes=2, seed=0)
     assert np.array_equal(again_portal, portal) and np.array_equal(again_frames, frames)
+    inputs, reduced_portal = labelled_frames(env, episodes=2, seed=0, reduce=pose_net.downsample)
+    assert inputs.shape == (len(frames), 3, 64, 64) and inputs.dtype == np.float16  # half the memory of float32
+    assert np.array_equal(inputs, pose_net.downsample(frames)) and np.array_equal(reduced_portal, portal)
 
 
 def test_an_estimator_saved_and_loaded_reads_the_same_and_refuses_other_sizes(tiny, tmp_path):
@@ -70,6 +78,7 @@ def test_an_estimator_saved_and_loaded_reads_the_same_and_refuses_other_sizes(ti
     path = pose_net.save(est, tmp_path / "pose.safetensors")
     back = pose_net.load(path)
     assert np.allclose(back.portal(frames[:20]), est.portal(frames[:20]), atol=1e-6)
+    assert np.array_equal(est.read(pose_net.downsample(frames[:20])), est.portal(frames[:20]))
     assert back.size == (64, 64) and back.error.keys() == est.error.keys() and "cable_deg" in back.error
     with pytest.raises(ValueError, match="the estimator reads"):
         est.portal(np.zeros((2, 32, 32, 3), np.uint8))
