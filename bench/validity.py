@@ -6,7 +6,8 @@
     python bench/validity.py --degrade drift jitter slowed                      # copies less the family's own
     python bench/validity.py --from-json docs/validity.json                     # re-print earlier results
 
-For each task and each trainee family (fastrl.data.families; `mixed`: the acted families, each subject its own mix), a
+For each task and each trainee family (fastrl.data.families; `mixed`: the acted families, each subject its own mix;
+`mixed_overlays`: the same over the five overlays on the recordings, as a cohort built outside the project may be), a
 cohort of 5 levels x 10 subjects is written without actions (seed 0, under ROOT/TASK/FAMILY/cohort), then
 `fastrl assess COHORT --spec specs/TASK.yaml --top 10` (AIRL, the spec's generator; `train.seed` = each --seeds)
 learns from the best 10 and scores all 50. Printed per task, family and seed: Kendall tau-b against the skill labels
@@ -34,10 +35,21 @@ SCORES = ("reward", "value", "heuristic", "time", "path_length", "subtasks")
 ROOT = Path("runs/bench-validity")
 
 
+MIXES = ("mixed", "mixed_overlays")  # cohorts whose subjects each draw their own mix of several families
+
+
+def drawn_from(family: str) -> tuple[str, ...]:
+    """The families a cohort's subjects draw from: `mixed` the acted ones, `mixed_overlays` the overlays."""
+    from fastrl.data.families import FAMILIES
+
+    if family in MIXES:
+        return tuple(f for f in FAMILIES if bool(FAMILIES[f].overlay) == (family == "mixed_overlays"))
+    return (family,)
+
+
 def cohort(task: str, family: str, root: Path) -> Path:
     """The family's 5 x 10 cohort of the task without actions, written once (again when the task has changed)."""
     from fastrl.data.cohort import make_cohort
-    from fastrl.data.families import FAMILIES
     from fastrl.data.trajectory import Trajectory
     from fastrl.spec import load_spec, task_hash
 
@@ -47,21 +59,20 @@ def cohort(task: str, family: str, root: Path) -> Path:
     if len(files) == 50 and Trajectory.load(files[0]).meta.get("task_hash") == task_hash(spec):
         return out
     out.mkdir(parents=True, exist_ok=True)
-    families = tuple(f for f in FAMILIES if not FAMILIES[f].overlay) if family == "mixed" else (family,)
-    for traj in make_cohort(spec, 5, 10, seed=0, families=families):
+    for traj in make_cohort(spec, 5, 10, seed=0, families=drawn_from(family)):
         bare = Trajectory(traj.time, traj.portal, traj.meta, instruments=traj.instruments, bodies=traj.bodies)
         bare.save(out / f"{traj.meta['subject']}.npz")
     return out
 
 
 def left_out(family: str, degrade: list[str] | None) -> list[str]:
-    """The --set of the ranking's degraded copies without the family's own overlay (leave one family out)."""
+    """The --set of the ranking's degraded copies without the overlays of the family or its mix (leave one out)."""
     from fastrl.data.families import FAMILIES
 
     if degrade is None:
         return []
-    own = FAMILIES[family].overlay if family in FAMILIES else None
-    return [f"irl.discriminator.ranking_degraded=[{', '.join(d for d in degrade if d != own)}]"]
+    own = {FAMILIES[f].overlay for f in drawn_from(family)}
+    return [f"irl.discriminator.ranking_degraded=[{', '.join(d for d in degrade if d not in own)}]"]
 
 
 def measure(task: str, family: str, seed: int, root: Path, sets: tuple[str, ...] = ()) -> dict:
@@ -119,7 +130,7 @@ def main() -> None:
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--tasks", nargs="+", default=["tracelines"])
-    parser.add_argument("--families", nargs="+", default=[*FAMILIES, "mixed"])
+    parser.add_argument("--families", nargs="+", default=[*FAMILIES, *MIXES])
     parser.add_argument("--seeds", nargs="+", type=int, default=[0])
     parser.add_argument("--root", type=Path, default=ROOT)
     parser.add_argument("--set", dest="sets", action="append", default=[], help="spec change, as fastrl's --set")
@@ -134,9 +145,9 @@ def main() -> None:
     if args.from_json:
         print(table(json.loads(args.from_json.read_text())["rows"]))
         return
-    unknown = [f for f in args.families if f not in FAMILIES and f != "mixed"]
+    unknown = [f for f in args.families if f not in FAMILIES and f not in MIXES]
     if unknown:
-        parser.error(f"unknown family {unknown[0]}: choose from {', '.join(FAMILIES)}, mixed")
+        parser.error(f"unknown family {unknown[0]}: choose from {', '.join([*FAMILIES, *MIXES])}")
     started = {"machine": machine_line(), "utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()), "sets": args.sets}
     print(f"# {started['utc']} UTC, {started['machine']}", flush=True)
     rows = []
