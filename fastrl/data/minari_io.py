@@ -41,14 +41,10 @@ def episode_buffer(env, traj: Trajectory, index: int):
     """One trajectory replayed as a Minari EpisodeBuffer (observations T, actions, rewards, ends T-1)."""
     from minari.data_collector import EpisodeBuffer
 
-    from .loop import episode_steps
-    from .replay import measured
+    from .replay import trajectory_steps
 
     observations, rewards, term = [], [], False
-    seed = int(traj.meta.get("seed", 0))
-    for obs, reward, info, _ in episode_steps(
-        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies, read_past=measured(traj)
-    ):
+    for obs, reward, info, _ in trajectory_steps(env, traj):
         observations.append(obs)
         rewards.append(float(reward))
         term = bool(info["success"])

@@ -8,8 +8,7 @@ import numpy as np
 
 from .frames import control_grid, nearest_rows
 from .inverse import to_control_rate
-from .loop import episode_steps
-from .replay import check_ranges, measured
+from .replay import check_ranges, trajectory_steps
 from .trajectory import Trajectory
 from .video import write_video
 
@@ -20,14 +19,7 @@ def rendered_frames(env, traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
     traj = to_control_rate(traj, env.unwrapped.task_spec.episode.control_hz)
     check_ranges(env, traj)
     u, frames = env.unwrapped, []
-    for _ in episode_steps(
-        env,
-        int(traj.meta.get("seed", 0)),
-        portal=traj.portal,
-        instruments=traj.instruments,
-        bodies=traj.bodies,
-        read_past=measured(traj),
-    ):
+    for _ in trajectory_steps(env, traj):
         frames.append(u.render())
     return traj.time[: len(frames)] - traj.time[0], np.stack(frames)
 

@@ -70,6 +70,14 @@ def measured(traj: Trajectory) -> bool:
     return traj.meta.get("portal_from") == "video" or "imported_from" in traj.meta
 
 
+def trajectory_steps(env, traj: Trajectory):
+    """episode_steps replaying a trajectory: its poses (measured ones read past), instruments and bodies, its seed."""
+    seed = int(traj.meta.get("seed", 0))
+    return episode_steps(
+        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies, read_past=measured(traj)
+    )
+
+
 def replay(env, traj: Trajectory, on_sample: Callable | None = None) -> tuple[np.ndarray, list[dict], np.ndarray]:
     """Observations, infos and rewards of a trajectory, recomputed by placing the scope at each sample.
 
@@ -77,10 +85,7 @@ def replay(env, traj: Trajectory, on_sample: Callable | None = None) -> tuple[np
     """
     check_ranges(env, traj)
     observations, infos, rewards = [], [], []
-    seed = int(traj.meta.get("seed", 0))
-    for obs, reward, info, _ in episode_steps(
-        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies, read_past=measured(traj)
-    ):
+    for obs, reward, info, _ in trajectory_steps(env, traj):
         if on_sample is not None:
             on_sample(env.unwrapped)
         observations.append(obs)
@@ -140,14 +145,11 @@ def replay_episode(
 ) -> tuple[EpisodeRecord, np.ndarray]:
     """A trajectory replayed as an EpisodeRecord (and its observations); `on_step(step, env)` sees each state."""
     check_ranges(env, traj)
-    seed = int(traj.meta.get("seed", 0))
     rec = EpisodeRecorder(env, image_every=image_every, image=lambda u: u.render())
     observations = []
-    for obs, reward, info, _ in episode_steps(
-        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies, read_past=measured(traj)
-    ):
+    for obs, reward, info, _ in trajectory_steps(env, traj):
         observations.append(obs)
         step = rec.snapshot(float(reward), info)
         if on_step is not None:
             on_step(step, env.unwrapped)
-    return rec.record(seed, traj.actions, info), np.array(observations)
+    return rec.record(int(traj.meta.get("seed", 0)), traj.actions, info), np.array(observations)
