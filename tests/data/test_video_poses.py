@@ -47,10 +47,11 @@ def test_smoothing_keeps_slow_motion_removes_jitter_and_stays_continuous_across_
 
 
 def tiny_estimator(env):
-    """Labelled frames of two episodes of the env's task (64 px) and an estimator fitted to them for one epoch."""
+    """Labelled frames of two episodes of the env's task and an estimator fitted to them for one epoch."""
     frames, portal = labelled_frames(env, episodes=2, seed=0)
-    inputs, ranges = pose_net.downsample(frames), env.unwrapped.task.ranges
-    return frames, portal, pose_net.fit(inputs, portal, size=(64, 64), ranges=ranges, task_hash="t", seed=0, epochs=1)
+    u, inputs = env.unwrapped, pose_net.downsample(frames)
+    est = pose_net.fit(inputs, portal, size=(u.width, u.height), ranges=u.task.ranges, task_hash="t", seed=0, epochs=1)
+    return frames, portal, est
 
 
 @pytest.fixture(scope="module")
