@@ -31,7 +31,7 @@ def deviations(scored: list[TrajectoryScores], reference: dict) -> dict[str, np.
     """Per trajectory: distance (mm) to the expert's path on the same seed, at each percent of the procedure."""
     out = {}
     for s in scored:
-        ref = reference.get(int(s.meta.get("seed", 0)))
+        ref = reference.get(s.seed)
         if ref is not None:
             out[s.name] = 1000.0 * deviation_by_progress(s.tip, s.time, ref[1], ref[0])
     return out

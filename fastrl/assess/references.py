@@ -131,7 +131,7 @@ def expert_paths(
 
 def recorded_path(scorer: Scorer, seed: int, recordings: list) -> tuple[np.ndarray, np.ndarray]:
     """(time from 0, tip path) of the best recording on `seed`, else of the best of all."""
-    traj = ([t for t in recordings if int(t.meta.get("seed", 0)) == seed] or recordings)[0]
+    traj = ([t for t in recordings if t.seed == seed] or recordings)[0]
     return traj.time - traj.time[0], scorer.tip_path(traj.portal)
 
 

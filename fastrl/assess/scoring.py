@@ -55,6 +55,11 @@ class TrajectoryScores:
         return str(self.meta.get("subject") or self.name)
 
     @property
+    def seed(self) -> int:
+        """The episode seed the trajectory was recorded with (0 where it gave none)."""
+        return int(self.meta.get("seed", 0))
+
+    @property
     def skill(self):
         """The ground-truth skill label, if the file carries one."""
         return self.meta.get("skill")

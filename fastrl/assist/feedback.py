@@ -58,11 +58,11 @@ def attempt_feedback(
         agent, _ = rollout_trajectory(
             scorer.env,
             lambda o: policy(o[None])[0],
-            int(traj.meta.get("seed", 0)),
+            traj.seed,
             {"source": "agent", "subject": "trained agent"},
         )
         out["agent"] = scorer.score(agent, "agent").scores
-    dev = deviations([scored], expert_paths(scorer, [traj.meta.get("seed", 0)])).get("attempt")
+    dev = deviations([scored], expert_paths(scorer, [traj.seed])).get("attempt")
     out["deviation_mm"] = [] if dev is None else [round(float(v), 2) for v in dev]
     out["worst_moments"] = [] if dev is None else worst_moments(dev, float(scored.time[-1]))
     return out

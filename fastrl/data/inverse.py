@@ -150,7 +150,7 @@ class ActionRecovery:
             self.weights = WEIGHTS
         if traj.bodies is not None and u.loose is not None:
             options["bodies"] = traj.bodies[0]
-        u.reset(seed=int(traj.meta.get("seed", 0)), options=options)
+        u.reset(seed=traj.seed, options=options)
         actions, residual = [], []
         previous = np.zeros(u.action_space.shape or (), np.float32)
         for i, goal in enumerate(goals[1:], 1):

@@ -60,7 +60,7 @@ def episode_buffer(env, traj: Trajectory, index: int):
     terminations[-1], truncations[-1] = bool(term), not term
     return EpisodeBuffer(
         id=index,
-        seed=int(traj.meta.get("seed", 0)),
+        seed=traj.seed,
         observations=np.asarray(observations, np.float32),
         actions=np.asarray(traj.actions[: n - 1]),
         rewards=rewards,

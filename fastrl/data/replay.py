@@ -72,7 +72,7 @@ def measured(traj: Trajectory) -> bool:
 
 def trajectory_steps(env, traj: Trajectory):
     """episode_steps replaying a trajectory: its poses (measured ones read past), instruments and bodies, its seed."""
-    seed = int(traj.meta.get("seed", 0))
+    seed = traj.seed
     return episode_steps(
         env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies, read_past=measured(traj)
     )
@@ -100,7 +100,7 @@ def replay_arrays(env, traj: Trajectory) -> Replayed:
     step."""
     check_ranges(env, traj)
     if can_replay_columns(env):
-        return replay_columns(env, traj.portal, int(traj.meta.get("seed", 0)), measured(traj))
+        return replay_columns(env, traj.portal, traj.seed, measured(traj))
     tips = []
     obs, infos, rewards = replay(env, traj, lambda u: tips.append(u.state.tip_pos))
     contacts = np.array([i["contacts"] for i in infos])
@@ -152,4 +152,4 @@ def replay_episode(
         step = rec.snapshot(float(reward), info)
         if on_step is not None:
             on_step(step, env.unwrapped)
-    return rec.record(int(traj.meta.get("seed", 0)), traj.actions, info), np.array(observations)
+    return rec.record(traj.seed, traj.actions, info), np.array(observations)

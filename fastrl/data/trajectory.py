@@ -64,6 +64,11 @@ class Trajectory:
         if problem:
             raise TrajectoryError(problem)
 
+    @property
+    def seed(self) -> int:
+        """The episode seed the recording was made with (its targets, its start); 0 where the file gives none."""
+        return int(self.meta.get("seed", 0))
+
     def problem(self) -> str | None:
         """Why this trajectory breaks the contract, or None."""
         if self.time.ndim != 1 or len(self.time) < 2:

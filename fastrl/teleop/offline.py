@@ -115,7 +115,7 @@ def replay_in_viewer(spec: TaskSpec, traj: Trajectory, speed: float = 1.0, linge
 
     check_display()
     env = FastEnv(spec)
-    env.reset(seed=int(traj.meta.get("seed", 0)), options={"portal": traj.portal[0], "read_past": measured(traj)})
+    env.reset(seed=traj.seed, options={"portal": traj.portal[0], "read_past": measured(traj)})
     handle = mujoco.viewer.launch_passive(env.model, env.data, show_left_ui=False, show_right_ui=False)
     t0, shown = time.monotonic(), 0
     try:

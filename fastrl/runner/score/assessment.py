@@ -200,7 +200,7 @@ def assess(
         if drawing:  # the path and deviation figures need no report: they start first
             expert_cache = run / "assessment" / "expert_paths.npz" if run is not None else None
             by = group_key([row(s) for s in everything])
-            seeds = [s.meta.get("seed", 0) for s in kept]
+            seeds = [s.seed for s in kept]
             compute = helper and helper.expert_paths
             devs = deviations(kept, expert_paths(scorer, seeds, expert_cache, compute, recordings))
             radius = scorer.spec.scene.radius
