@@ -72,9 +72,8 @@ def measured(traj: Trajectory) -> bool:
 
 def trajectory_steps(env, traj: Trajectory):
     """episode_steps replaying a trajectory: its poses (measured ones read past), instruments and bodies, its seed."""
-    seed = traj.seed
     return episode_steps(
-        env, seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies, read_past=measured(traj)
+        env, traj.seed, portal=traj.portal, instruments=traj.instruments, bodies=traj.bodies, read_past=measured(traj)
     )
 
 
