@@ -108,6 +108,10 @@ def test_a_run_starts_the_experts_evaluation_before_torch_and_rerun_load(cache, 
         [sys.executable, "-c", EARLY_START, str(tmp_path / "runs")], capture_output=True, text=True, env=env
     )
     assert res.returncode == 0, res.stderr
-    assert json.loads(res.stdout.splitlines()[-1]) == [[], True]  # once, forked, before the heavy imports
+    calls = json.loads(res.stdout.splitlines()[-1])
+    assert calls[:2] == [[], True]  # forked, before the heavy imports
+    # a busy machine gives the idle child no CPU before the evaluation, which then starts it afresh beside (CI at
+    # load 4, 2026-12-06): at most that once more
+    assert len(calls) == 2 or (len(calls) == 4 and calls[3] is True)
     (eval_json,) = (tmp_path / "runs").glob("*/*/eval.json")
     assert json.loads(eval_json.read_text())["expert"]["subtasks_completed"] == 1.0
