@@ -9,7 +9,7 @@ import numpy as np
 
 from ..data.inverse import to_control_rate
 from ..data.replay import replay_arrays
-from ..data.trajectory import VIDEO_ONLY, Trajectory, TrajectoryError
+from ..data.trajectory import VIDEO_ONLY, Trajectory, TrajectoryError, recorded_seed
 from ..env.fast_env import FastEnv
 from ..model.kinematics import Kinematics
 from ..spec import task_hash
@@ -57,7 +57,7 @@ class TrajectoryScores:
     @property
     def seed(self) -> int:
         """The episode seed the trajectory was recorded with (0 where it gave none)."""
-        return int(self.meta.get("seed", 0))
+        return recorded_seed(self.meta)
 
     @property
     def skill(self):

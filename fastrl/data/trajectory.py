@@ -28,6 +28,11 @@ __all__ = ["COORDINATES", "SOURCES", "VIDEO_ONLY", "Trajectory", "TrajectoryErro
 VIDEO_ONLY = "is video only (frames, no portal coordinates): replay and kinematic scores need portal coordinates"
 
 
+def recorded_seed(meta: dict) -> int:
+    """The episode seed a recording's metadata gives (its targets, its start); 0 where it gives none."""
+    return int(meta.get("seed", 0))
+
+
 class TrajectoryError(ValueError):
     """A trajectory file that does not follow the contract; the message says why."""
 
@@ -67,7 +72,7 @@ class Trajectory:
     @property
     def seed(self) -> int:
         """The episode seed the recording was made with (its targets, its start); 0 where the file gives none."""
-        return int(self.meta.get("seed", 0))
+        return recorded_seed(self.meta)
 
     def problem(self) -> str | None:
         """Why this trajectory breaks the contract, or None."""
