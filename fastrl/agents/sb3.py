@@ -34,11 +34,20 @@ ACTIVATIONS = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}
 
 
 def make_vec_env(
-    spec: TaskSpec, n_envs: int, seed: int, workers: int = 1, late_starts: float = 0.0, later_subtasks: float = 0.0
+    spec: TaskSpec,
+    n_envs: int,
+    seed: int,
+    workers: int = 1,
+    late_starts: float = 0.0,
+    later_subtasks: float = 0.0,
+    *,
+    recorded: tuple = (),
+    recorded_starts: float = 0.0,
 ) -> VecEnv:
     """Vectorised FastEnvs, stepped in batches by `workers` processes (this one included), optionally normalised;
     `late_starts`: each env's episodes after its first start up to that share of the time limit late;
-    `later_subtasks`: that share of them at a random later subtask.
+    `later_subtasks`: that share of them at a random later subtask; `recorded_starts`: that share at a random state
+    of the `recorded` (seed, portal) recordings.
 
     Cheap envs step fastest in batches: one process per env (SB3's SubprocVecEnv) costs more in messages than
     it gains. The split never changes the trajectories. Learning from demonstrations, env rewards are replaced
@@ -46,7 +55,14 @@ def make_vec_env(
     """
     processes = min(workers, n_envs, os.cpu_count() or 1)
     # a partial pickles: image workers start from a fresh process
-    make = partial(FastEnv, spec, late_starts=late_starts, later_subtasks=later_subtasks)
+    make = partial(
+        FastEnv,
+        spec,
+        late_starts=late_starts,
+        later_subtasks=later_subtasks,
+        recorded=recorded,
+        recorded_starts=recorded_starts,
+    )
     if processes > 1:
         venv = SplitVecEnv(make_env=make, n_envs=n_envs, processes=processes, fork=spec.observation.image is None)
     else:

@@ -38,11 +38,17 @@ class FastEnv(gym.Env):
         *,
         late_starts: float = 0.0,
         later_subtasks: float = 0.0,
+        recorded: tuple = (),
+        recorded_starts: float = 0.0,
         family: type[Task] | None = None,
     ):
         self.task_spec = spec
         self.late_starts = late_starts  # unseeded resets (a vector env's next episodes) start up to this share late
         self.later_subtasks = later_subtasks  # and this share of them at a random later subtask
+        self.recorded = tuple(recorded)  # (seed, portal) of recordings whose states unseeded resets may start at
+        self.recorded_starts = recorded_starts if self.recorded else 0.0  # the share of them that do
+        self._recorded_lengths: dict[int, int] = {}
+        self._scratch: FastEnv | None = None
         self.task: CompiledTask = compile_task(spec)
         self.model, self.data = self.task.model, mujoco.MjData(self.task.model)
         self.render_mode, self.width, self.height = render_mode, width, height
@@ -69,6 +75,8 @@ class FastEnv(gym.Env):
         state_space = spaces.Box(-np.inf, np.inf, (self.obs_dim * self.stack,), np.float32)
         image = spec.observation.image
         self.frames = None if image is None else EndoscopeFrames(task=self.task, model=self.model, image=image)
+        if self.recorded_starts and image is not None:
+            raise ValueError("recorded starts replay state observations only, not endoscope images")
         if self.frames is None:
             self.observation_space = state_space
         else:
@@ -87,6 +95,10 @@ class FastEnv(gym.Env):
         if self.frames is not None:
             self.frames.reset(seed)
         self.steps = 0
+        if self.recorded_starts and seed is None and not options and self.np_random.random() < self.recorded_starts:
+            self._start_recorded()
+            obs = self._state() if self.stack == 1 else self._frames.reshape(-1).copy()
+            return obs, self._info([0.0] * len(self.feature_names))
         self.family.initialize_episode(self.np_random, options)
         if self.later_subtasks and seed is None and not options and self.state.subtasks_total > 1:
             if self.np_random.random() < self.later_subtasks:
@@ -182,6 +194,27 @@ class FastEnv(gym.Env):
         self._frames[:] = other._frames
         if self.frames is not None:
             self.frames.frames[:] = other.frames.frames
+
+    def _start_recorded(self) -> None:
+        """Continue a random recording at a random step before it ends or the task does (a training start)."""
+        i = int(self.np_random.integers(len(self.recorded)))
+        if i not in self._recorded_lengths:
+            self._recorded_lengths[i] = self._replay_recorded(i, None)
+        self._replay_recorded(i, int(self.np_random.integers(self._recorded_lengths[i])))
+        self.copy_state_from(self._scratch)
+
+    def _replay_recorded(self, i: int, upto: int | None) -> int:
+        """Replay recording i in the scratch env up to sample `upto` (None: all); return the samples replayed
+        before the task ended or the time limit came."""
+        if self._scratch is None:
+            self._scratch = FastEnv(self.task_spec, family=type(self.family))
+        seed, portal = self.recorded[i]
+        scratch, n = self._scratch, min(len(portal), self.max_steps) if upto is None else upto + 1
+        scratch.reset(seed=seed, options={"portal": portal[0]})
+        for k in range(1, n):
+            if scratch.replay_step(portal[k])[2]:
+                return k
+        return n
 
     # ---- the family's, for the expert, trainees and replay -------------------------------
     @property

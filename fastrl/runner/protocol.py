@@ -177,6 +177,13 @@ def run_protocol(
     run = run or new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
     write_meta(run, spec, str(spec_path), {"status": "learning", "overrides": list(overrides), "kind": "assess"})
     write_best(chosen, run / "best", keep_actions)
+    generator = spec.irl.generator
+    if generator is not None and generator.recorded_starts and len(ranked) > top:  # the rest's states as starts
+        files = {path.stem: path for path in trajectory_files(inputs)}
+        hz = spec.episode.control_hz
+        rest = [(s, to_control_rate(Trajectory.load(files[s.name]), hz)) for s, _ in ranked[top:] if s.name in files]
+        write_best(rest, run / "others")
+        overrides = [*overrides, f"irl.demonstrations.others={run / 'others'}"]
     rows = [{"file": s.name, "subject": s.subject, "skill": s.skill, **_criterion(s)} for s, _ in chosen]
     why = (
         f"learned from the {len(chosen)} best of {len(ranked)} recordings by {BY[by]}"

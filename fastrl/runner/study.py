@@ -135,6 +135,9 @@ def train_irl(run: Path, algo: str, console: Console, progress: bool) -> Path:
         f"train.timesteps={spec.study.timesteps}",
         "study.enabled=false",
     ]
+    generator = spec.irl.generator
+    if generator is not None and generator.recorded_starts:  # the whole cohort's states as training starts
+        overrides.append(f"irl.demonstrations.others={run / 'cohort'}")
     return start_run(run / "spec.yaml", overrides, console=console, progress=progress, into=sub)
 
 

@@ -19,6 +19,12 @@ class Demonstrations(Strict):
     path: str | None = Field(None, description="directory of trajectory files (.npz); else the scripted expert")
     expert: int = Field(20, ge=1, description="how many scripted-expert demonstrations to write into the run")
     seed: int = Field(0, ge=0, description="seed of the first scripted-expert demonstration")
+    others: str | None = Field(
+        None,
+        description="directory of the cohort's recordings not learned from (`fastrl assess` writes it, a study "
+        "points at its whole cohort, where `generator.recorded_starts` asks); only their states are used, as "
+        "training starts",
+    )
 
 
 class DiscriminatorSettings(Strict):
@@ -161,6 +167,14 @@ class Generator(Strict):
         "to this, already gone (the pose as usual), so the critic, whose value scores trainees, also meets the late "
         "clock that slow trainees reach; 0: every episode at 0 s",
     )
+    recorded_starts: float = Field(
+        0.0,
+        ge=0,
+        lt=1,
+        description="this share of every env's training episodes after its first starts at a random state of a "
+        "recording (the demonstrations and, with `fastrl assess` or a study, the cohort's others), so the critic, "
+        "whose value scores trainees, and the discriminator meet the states trainees visit; 0: none",
+    )
     value_ignore: list[str] = Field(
         [],
         description="observation terms the PPO generator's critic (whose value scores trainees) leaves out while the "
@@ -220,6 +234,12 @@ def late_starts(train: Train, irl: IRL) -> float:
     """Up to what share of the time limit the PPO generator's training episodes start late (`irl.generator`)."""
     gen = ppo_generator(train, irl)
     return gen.late_starts if gen is not None else 0.0
+
+
+def recorded_starts(train: Train, irl: IRL) -> float:
+    """The share of the PPO generator's training episodes that start at a recorded state (`irl.generator`)."""
+    gen = ppo_generator(train, irl)
+    return gen.recorded_starts if gen is not None else 0.0
 
 
 def learning_train(train: Train, irl: IRL) -> Train:

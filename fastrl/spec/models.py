@@ -13,7 +13,7 @@ from .base import NonNeg, Pos, Strict, _fail, _raise
 from .defaults import resolve_defaults
 from .episode import Episode, episode_term_errors
 from .instruments import Instrument, instrument_errors
-from .irl import IRL, late_starts, learning_train, starts_cloned
+from .irl import IRL, late_starts, learning_train, recorded_starts, starts_cloned
 from .limits import MAX_LINE_POINTS, MAX_REPLAY_GB, MAX_SUBTASKS
 from .loose import Cup, LooseBody, loose_errors
 from .migrate import upgraded
@@ -218,6 +218,11 @@ class TaskSpec(Strict):
                 if name not in observed
             ]
         )
+        if self.generator_recorded_starts and (self.instruments or self.task.bodies):
+            _fail(
+                "irl.generator.recorded_starts",
+                "recorded starts replay the scope's poses alone: not for a task with instruments or loose bodies",
+            )
         names = [p.name for p in self.scene.portals]
         if self.scope.portal not in names:
             _fail("scope.portal", f"no portal named '{self.scope.portal}' (portals: {', '.join(names)})")
@@ -294,3 +299,8 @@ class TaskSpec(Strict):
     def generator_late_starts(self) -> float:
         """Up to what share of the time limit GAIL/AIRL's PPO generator starts its training episodes late."""
         return late_starts(self.train, self.irl)
+
+    @property
+    def generator_recorded_starts(self) -> float:
+        """The share of GAIL/AIRL's PPO generator's training episodes that start at a recorded state."""
+        return recorded_starts(self.train, self.irl)

@@ -339,6 +339,44 @@ def test_later_subtasks_start_unseeded_episodes_at_a_later_avatar_the_expert_the
     assert untouched.state.subtasks_done == 0  # the default: every episode at the first
 
 
+def test_recorded_starts_continue_a_recording_mid_way_and_the_expert_then_finishes():
+    """A generator env's unseeded episodes start at a state of a given recording (its pose, its avatars done, its
+    clock), the same seeds draw the same starts, seeded resets (evaluations) start as the spec says, and the scripted
+    expert finishes the task from one."""
+    from fastrl.data.replay import expert_trajectories
+    from fastrl.env import FastEnv
+    from fastrl.spec import load_spec
+
+    spec = load_spec(spec_file("tracelines"))
+    (demo,) = expert_trajectories(FastEnv(spec), [7])
+    recorded = ((7, demo.portal),)
+    env, twin = (FastEnv(spec, recorded=recorded, recorded_starts=1.0) for _ in range(2))
+    env.reset(seed=3)
+    twin.reset(seed=3)
+    assert env.steps == 0 and env.state.subtasks_done == 0
+    replay = FastEnv(spec)
+    starts = []
+    for _ in range(8):
+        obs, _ = env.reset()
+        twin_obs, _ = twin.reset()
+        t = env.steps
+        starts.append(t)
+        np.testing.assert_array_equal(obs, twin_obs)
+        np.testing.assert_allclose(env.portal_coordinates(), demo.portal[t], atol=1e-9)
+        replay.reset(seed=7, options={"portal": demo.portal[0]})
+        for q in demo.portal[1 : t + 1]:
+            replay.replay_step(q)
+        assert env.state.subtasks_done == replay.state.subtasks_done and env.state.time == pytest.approx(t * env.dt)
+    assert len(set(starts)) > 4 and max(starts) < len(demo.portal) - 1
+    expert = ScriptedExpert(env)
+    terminated = truncated = False
+    while not (terminated or truncated):
+        obs, _, terminated, truncated, info = env.step(expert.act(obs))
+    assert terminated and info["success"] and env.steps > starts[-1]
+    env.reset(seed=4)
+    assert env.steps == 0 and env.state.subtasks_done == 0
+
+
 def test_late_starts_run_the_clock_on_unseeded_resets_only():
     """A generator env's episodes after its first start late, on the clock the policy observes; seeded resets
     (evaluations) and replays (options) always start at 0 s, and a late episode ends at the time limit."""

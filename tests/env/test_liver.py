@@ -240,6 +240,8 @@ def test_the_study_runs_end_to_end_and_resumes_without_redoing(tmp_path):
         assert saved >= {"reward.safetensors", "value.safetensors", "policy.safetensors"}
         reward = load_networks(run / algo / "networks")._reward.meta  # the policy sees the cue, the reward does not
         assert reward["inputs"] == [0, 1, 2] and reward.get("reward_inputs", [0, 1, 2]) == [0, 1, 2]
+        trained = load_spec(run / algo / "spec.yaml")  # the generator starts at the whole cohort's states
+        assert trained.irl.demonstrations.others == str(run / "cohort") and trained.generator_recorded_starts == 0.25
     assert len(list((run / "best").glob("*.npz"))) == 2 and len(list((run / "cohort").glob("*.npz"))) == 6
     assert (run / "table3.png").stat().st_size > 10_000
     verify = subprocess.run(

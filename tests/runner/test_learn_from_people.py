@@ -152,7 +152,7 @@ def test_assess_runs_the_protocol_on_a_task_without_a_scripted_expert(tmp_path, 
     res = CliRunner().invoke(
         app,
         ["assess", str(people), "--spec", str(NO_EXPERT), "--top", "3", "-o", str(out), "--runs", str(tmp_path)]
-        + ["--no-progress"],
+        + ["--no-progress", "--set", "irl.generator.recorded_starts=0.5"],
     )
     assert res.exit_code == 0, res.output
     assert "learned from the 3 best of 11 recordings by subtasks completed (more first), then duration" in res.output
@@ -170,6 +170,8 @@ def test_assess_runs_the_protocol_on_a_task_without_a_scripted_expert(tmp_path, 
     assert len(protocol["chosen"]) == 3 and protocol["order"][0] in {c["file"] for c in protocol["chosen"]}
     best = [Trajectory.load(f) for f in sorted((run / "best").glob("*.npz"))]
     assert len(best) == 3 and all(t.actions is None for t in best)
+    others = {f.stem for f in (run / "others").glob("*.npz")}  # the rest, as the generator's training starts
+    assert len(others) == 8 and not others & {f.stem for f in (run / "best").glob("*.npz")}
     learned = run / "learned"
     assert "expert" not in json.loads((learned / "eval.json").read_text())
     assert "irl/ranking_loss" in (learned / "metrics.jsonl").read_text()

@@ -362,6 +362,16 @@ def test_override_error_names_set(tmp_path):
     assert "(from --set 'task.cue.dwell=-2')" in issue.message
 
 
+@pytest.mark.parametrize("spec", ["loose_bodies", "triangulation"])
+def test_recorded_starts_are_refused_where_the_scope_alone_does_not_replay_a_state(spec):
+    """Recorded starts replay the scope's poses: a task with loose bodies or instruments is told so, at the field."""
+    with pytest.raises(SpecError) as exc:
+        load_spec(SPECS / f"{spec}.yaml", ["irl.algorithm=airl", "irl.generator.recorded_starts=0.5"])
+    [issue] = exc.value.errors
+    assert issue.path == "irl.generator.recorded_starts" and "instruments or loose bodies" in issue.message
+    assert load_spec(SPECS / "liver_tour.yaml").irl.generator.recorded_starts == 0.25  # the one spec that asks
+
+
 @pytest.mark.parametrize("name", REAL)
 def test_real_specs_load(name):
     """The bundled specs are valid."""

@@ -16,6 +16,7 @@ from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 from ...agents.anchor import CloneAnchor
 from ...agents.bc import action_accuracy, behaviour_clone
 from ...agents.sb3 import build_model, make_vec_env
+from ...data.inverse import to_control_rate
 from ...data.recordings import load_recordings, with_actions
 from ...data.replay import demonstration_pairs
 from ...data.trajectory import Trajectory
@@ -126,6 +127,20 @@ def demonstrations(spec: TaskSpec, run: Path, console: Console, progress: bool) 
     return prepared.trajectories
 
 
+def recorded_states(spec: TaskSpec) -> tuple:
+    """(seed, portal) of the recordings the generator's training episodes may start in (`recorded_starts`): the
+    demonstrations' folder and the cohort's others; () where it does not ask."""
+    if not spec.generator_recorded_starts:
+        return ()
+    cfg = spec.irl.demonstrations
+    folders = [Path(f) for f in (cfg.path, cfg.others) if f is not None]
+    if not folders:
+        raise ValueError("irl.generator.recorded_starts needs recordings: irl.demonstrations.path")
+    named, _ = load_recordings(folders, joint_ranges(spec.scope))
+    hz = spec.episode.control_hz
+    return tuple((t.seed, to_control_rate(t, hz).portal) for _, t in named)
+
+
 def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
     """Print the PPO generator's (or BC's) envs and hyperparameters and where they come from; keep them in meta.json."""
     train = spec.learning()
@@ -156,6 +171,7 @@ def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
         "cloned": cloned,
         "anchor": anchor,
         "late_starts": late,
+        "recorded_starts": spec.generator_recorded_starts,
     }
     update_meta(run, generator=meta)
 
@@ -164,7 +180,14 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     """The model (and, learning from demonstrations, the discriminator and its callback) for a run."""
     train = spec.learning()
     venv = make_vec_env(
-        spec, train.n_envs, train.seed, train.workers, spec.generator_late_starts, spec.training_later_subtasks
+        spec,
+        train.n_envs,
+        train.seed,
+        train.workers,
+        spec.generator_late_starts,
+        spec.training_later_subtasks,
+        recorded=recorded_states(spec),
+        recorded_starts=spec.generator_recorded_starts,
     )
     irl = spec.irl
     if irl.algorithm in ("none", "bc"):
