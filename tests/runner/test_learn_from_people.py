@@ -202,3 +202,13 @@ def test_assess_reports_bad_options_and_empty_cohorts_in_one_line(tmp_path):
     res = CliRunner().invoke(app, ["assess", str(nested.parent), "--spec", str(NO_EXPERT), "--runs", str(tmp_path)])
     message = f"no recording (.npz or video) in {nested.parent}: nothing to learn from; {nested} holds some"
     assert res.exit_code == 2 and message in " ".join(res.output.split()), res.output
+
+
+def test_recorded_starts_without_recordings_are_refused_in_one_line(tmp_path):
+    """A run asking its generator to start at recorded states, with the scripted expert's demonstrations and no
+    recordings, stops before training with one line that says what to set."""
+    args = ["run", str(spec_file("tracelines")), "--runs", str(tmp_path), "--no-progress"]
+    args += ["--set", "irl.algorithm=airl", "--set", "irl.generator.recorded_starts=0.5"]
+    res = CliRunner().invoke(app, args)
+    assert res.exit_code == 2 and "Traceback" not in res.output, res.output
+    assert "no recordings to start from: set irl.demonstrations.path" in " ".join(res.output.split())

@@ -134,8 +134,11 @@ def recorded_states(spec: TaskSpec) -> tuple:
         return ()
     cfg = spec.irl.demonstrations
     folders = [Path(f) for f in (cfg.path, cfg.others) if f is not None]
-    if not folders:
-        raise ValueError("irl.generator.recorded_starts needs recordings: irl.demonstrations.path")
+    if not folders:  # reported as a missing file, in one line, before any training
+        raise FileNotFoundError(
+            "irl.generator.recorded_starts: no recordings to start from: set irl.demonstrations.path "
+            "(fastrl assess and a study set it)"
+        )
     named, _ = load_recordings(folders, joint_ranges(spec.scope))
     hz = spec.episode.control_hz
     return tuple((t.seed, to_control_rate(t, hz).portal) for _, t in named)
