@@ -206,6 +206,25 @@ class IRL(Strict):
         return self.algorithm != "none"
 
 
+def unobserved_terms(irl: IRL, observed: list[str]) -> list[tuple]:
+    """(location, message, value) of each term the discriminator or the critic ignores that is not observed."""
+    listed = [
+        (("irl", "discriminator", field, i), name)
+        for field in ("ignore", "reward_ignore")
+        for i, name in enumerate(getattr(irl.discriminator, field) or [])
+    ]
+    listed += [
+        (("irl", "generator", "value_ignore", i), name)
+        for i, name in enumerate(irl.generator.value_ignore if irl.generator else [])
+    ]
+    shown = ", ".join(observed)
+    return [
+        (loc, f"'{name}' is not observed (observation terms: {shown})", name)
+        for loc, name in listed
+        if name not in observed
+    ]
+
+
 def ppo_generator(train: Train, irl: IRL) -> Generator | None:
     """The `irl.generator` settings this run learns with: GAIL or AIRL on PPO only (None otherwise, or unset)."""
     return irl.generator if irl.algorithm in ("gail", "airl") and train.algo == "PPO" else None

@@ -13,7 +13,7 @@ from .base import NonNeg, Pos, Strict, _fail, _raise
 from .defaults import resolve_defaults
 from .episode import Episode, episode_term_errors
 from .instruments import Instrument, instrument_errors
-from .irl import IRL, late_starts, learning_train, recorded_starts, starts_cloned
+from .irl import IRL, late_starts, learning_train, recorded_starts, starts_cloned, unobserved_terms
 from .limits import MAX_LINE_POINTS, MAX_REPLAY_GB, MAX_SUBTASKS
 from .loose import Cup, LooseBody, loose_errors
 from .migrate import upgraded
@@ -196,28 +196,7 @@ class TaskSpec(Strict):
                 "GAIL and AIRL need the kinematic observation: remove observation.image (pixel policies learn "
                 "from the spec's reward, or clone demonstrations: bc)",
             )
-        observed = self.observation.terms()
-        _raise(
-            [
-                (
-                    ("irl", "discriminator", field, i),
-                    f"'{name}' is not observed (observation terms: {', '.join(observed)})",
-                    name,
-                )
-                for field in ("ignore", "reward_ignore")
-                for i, name in enumerate(getattr(self.irl.discriminator, field) or [])
-                if name not in observed
-            ]
-            + [
-                (
-                    ("irl", "generator", "value_ignore", i),
-                    f"'{name}' is not observed (observation terms: {', '.join(observed)})",
-                    name,
-                )
-                for i, name in enumerate(self.irl.generator.value_ignore if self.irl.generator else [])
-                if name not in observed
-            ]
-        )
+        _raise(unobserved_terms(self.irl, self.observation.terms()))
         if self.generator_recorded_starts and (self.instruments or self.task.bodies):
             _fail(
                 "irl.generator.recorded_starts",
