@@ -2,6 +2,7 @@
 
     python bench/family_ceiling.py --tasks tracelines imagecentring periscoping
     python bench/family_ceiling.py --tasks tracelines --root runs/bench-validity --json docs/family_ceiling.json
+    python bench/family_ceiling.py --outside        # the cohorts of bench/outside_cohorts.py instead
 
 For each task and family, the 5 x 10 cohort of bench/validity.py (written there if missing, seed 0, without actions)
 is replayed as `fastrl assess` replays it, and each trajectory is summarised by what a rater or a tracker could
@@ -89,15 +90,16 @@ def supervised(features: np.ndarray, labels: np.ndarray) -> float:
     return tau(predicted, labels)
 
 
-def family_row(task: str, family: str, root: Path) -> dict:
-    """Every summary's tau-b, the best single one, and the supervised scorer's, for one family's cohort."""
+def family_row(task: str, family: str, root: Path, make=cohort) -> dict:
+    """Every summary's tau-b, the best single one, and the supervised scorer's, for one family's cohort (made by
+    `make`: bench/validity.py's or bench/outside_cohorts.py's)."""
     from fastrl.assess.scoring import Scorer
     from fastrl.spec import load_spec
 
     spec = load_spec(f"specs/{task}.yaml")
     scorer, columns = Scorer(spec), observation_columns(spec)
     rows, labels = [], []
-    for f in sorted(cohort(task, family, root).glob("*.npz")):
+    for f in sorted(make(task, family, root).glob("*.npz")):
         traj = scorer.load_file(f)
         scored, obs = scorer.replayed(traj, f.stem)
         rows.append(summaries(scored, obs, min(len(traj.time), len(obs)), columns))
@@ -125,7 +127,14 @@ def main() -> None:
     parser.add_argument("--families", nargs="+", default=[*FAMILIES, "mixed"])
     parser.add_argument("--root", type=Path, default=ROOT)
     parser.add_argument("--json", type=Path, help="write the rows here (docs/family_ceiling.json)")
+    parser.add_argument("--outside", action="store_true", help="bench/outside_cohorts.py's kinds and cohorts")
     args = parser.parse_args()
+    make = cohort
+    if args.outside:
+        import outside_cohorts
+
+        make, args.root = outside_cohorts.cohort, outside_cohorts.ROOT
+        args.families = [*outside_cohorts.KINDS, "mix"]
     print(f"# {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC, {machine_line()}", flush=True)
     print("| task | family | time | path length | best single summary | supervised (5-fold) |")
     print("|---|---|---|---|---|---|")
@@ -135,7 +144,7 @@ def main() -> None:
         for family in args.families:
             if two_hands and family not in WITH_INSTRUMENTS:
                 continue
-            r = family_row(task, family, args.root)
+            r = family_row(task, family, args.root, make)
             rows.append(r)
             t = r["tau_b"]
             print(

@@ -75,13 +75,14 @@ def left_out(family: str, degrade: list[str] | None) -> list[str]:
     return [f"irl.discriminator.ranking_degraded=[{', '.join(d for d in degrade if d not in own)}]"]
 
 
-def measure(task: str, family: str, seed: int, root: Path, sets: tuple[str, ...] = ()) -> dict:
-    """One protocol run on the family's cohort: tau-b of every score, and its wall time."""
+def measure(task: str, family: str, seed: int, root: Path, sets: tuple[str, ...] = (), make=None) -> dict:
+    """One protocol run on the family's cohort (made by `make`, else this bench's): tau-b of every score, whom it
+    learned from, and its wall time."""
     from rich.console import Console
 
     from fastrl.runner.protocol import run_protocol
 
-    folder = cohort(task, family, root)
+    folder = (make or cohort)(task, family, root)
     t0 = time.perf_counter()
     done = run_protocol(
         [folder],
@@ -148,14 +149,19 @@ def main() -> None:
     unknown = [f for f in args.families if f not in FAMILIES and f not in MIXES]
     if unknown:
         parser.error(f"unknown family {unknown[0]}: choose from {', '.join([*FAMILIES, *MIXES])}")
+    measure_all(args, lambda family: (*args.sets, *left_out(family, args.degrade)))
+
+
+def measure_all(args, sets_of, make=None) -> None:
+    """Every task, family and seed of the parsed `args` (spec changes `sets_of(family)`): printed as each ends, the
+    rows written to args.json after each, the table at the end."""
     started = {"machine": machine_line(), "utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()), "sets": args.sets}
     print(f"# {started['utc']} UTC, {started['machine']}", flush=True)
     rows = []
     for task in args.tasks:
         for family in args.families:
             for seed in args.seeds:
-                sets = (*args.sets, *left_out(family, args.degrade))
-                rows.append(measure(task, family, seed, args.root, sets))
+                rows.append(measure(task, family, seed, args.root, sets_of(family), make))
                 t = rows[-1]["tau_b"]
                 print(
                     f"{task} {family} s{seed}: "
