@@ -107,7 +107,10 @@ def print_agreement(seeds: dict) -> None:
     from rich.table import Table
 
     simple = list(next(iter(seeds["with_simple_metrics"].values()), {}))
-    t = Table(title=f"learned scores over seeds {', '.join(map(str, seeds['seeds']))}: Kendall tau")
+    t = Table(
+        title=f"learned scores over seeds {', '.join(map(str, seeds['seeds']))}: Kendall tau",
+        caption="seeds that agree make the same ranking, not necessarily a right one (RESULTS: outside cohorts)",
+    )
     for col in ("score", "between seeds: mean (min)", *(f"with {s}" for s in simple)):
         t.add_column(col, justify="right")
     for key, a in seeds["agreement"].items():

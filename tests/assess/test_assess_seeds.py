@@ -106,6 +106,7 @@ def test_assess_with_two_seeds_learns_two_scorers_and_reports_their_agreement(tw
     res, out, tmp_path = two_seeds
     assert res.exit_code == 0, res.output
     assert "learned scores over seeds 0, 1: Kendall tau" in res.output
+    assert "not necessarily a right one" in " ".join(res.output.split())  # agreement is not validity
     run = next(tmp_path.glob("medial_pair/*-assess-airl-s0"))
     assert (run / "learned-s0" / "networks").is_dir() and (run / "learned-s1" / "networks").is_dir()
     assert [load_spec(run / f"learned-s{s}" / "spec.yaml").train.seed for s in (0, 1)] == [0, 1]
