@@ -32,6 +32,7 @@ from validity import measure_all, table
 
 ROOT = Path("runs/bench-outside")
 LEVELS, PER_LEVEL = 5, 10
+SCOPE_ONLY = ("tracelines", "imagecentring", "periscoping")  # the kinds deform the scope's poses alone
 DEG = np.pi / 180
 
 
@@ -159,7 +160,7 @@ def cohort(task: str, kind: str, root: Path) -> Path:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--tasks", nargs="+", default=["tracelines"])
+    parser.add_argument("--tasks", nargs="+", default=["tracelines"], choices=SCOPE_ONLY)
     parser.add_argument("--kinds", nargs="+", default=[*KINDS, "mix"], choices=[*KINDS, "mix"])
     parser.add_argument("--seeds", nargs="+", type=int, default=[0])
     parser.add_argument("--root", type=Path, default=ROOT)
