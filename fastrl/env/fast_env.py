@@ -97,8 +97,7 @@ class FastEnv(gym.Env):
         self.steps = 0
         if self.recorded_starts and seed is None and not options and self.np_random.random() < self.recorded_starts:
             self._start_recorded()
-            obs = self._state() if self.stack == 1 else self._frames.reshape(-1).copy()
-            return obs, self._info([0.0] * len(self.feature_names))
+            return self.observation(), self._info([0.0] * len(self.feature_names))
         self.family.initialize_episode(self.np_random, options)
         if self.later_subtasks and seed is None and not options and self.state.subtasks_total > 1:
             if self.np_random.random() < self.later_subtasks:
