@@ -21,6 +21,7 @@ from .runs.rundir import new_run_dir, update_meta, write_meta
 from .score.assessment import Assessment, assess, outputs_for
 from .score.video import VIDEO_SUFFIXES
 from .score.video_inputs import video_files, video_overrides, videos_as_trajectories
+from .seeds_at_once import at_once, learn_at_once
 
 BY = {
     "time": "subtasks completed (more first), then duration (shorter first)",
@@ -145,8 +146,9 @@ def run_protocol(
     address: str | None = None,
 ) -> Protocol:
     """Rank, choose the best `top`, learn from them without actions on `seeds` training seeds (the spec's and the
-    next ones; as Ray tasks at `address`, all at once where it has the CPUs), score everything; return what was
-    done. `keep_actions` (bench/learn_from_people.py's comparison) learns from the recorded actions where there are."""
+    next ones; as Ray tasks at `address`, all at once where it has the CPUs; else at once on this machine's spare
+    cores), score everything; return what was done. `keep_actions` (bench/learn_from_people.py's comparison) learns
+    from the recorded actions where there are."""
     from .train.run import start_run
 
     console = console or Console(stderr=True)
@@ -210,6 +212,8 @@ def run_protocol(
         from .seeds_on_ray import learn_on_ray
 
         learned = learn_on_ray(address, spec_path, learning, console)
+    elif at_once(seeds) > 1:  # spare cores
+        learned = learn_at_once(spec_path, learning, console, at_once(seeds), progress)
     else:
         learned = [start_run(spec_path, o, console=console, progress=progress, into=into) for o, into in learning]
     update_meta(run, status="scoring")

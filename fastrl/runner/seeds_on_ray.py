@@ -3,8 +3,6 @@ has CPUs for; the run folders must be the same paths on every node (as for `fast
 
 from __future__ import annotations
 
-import io
-import os
 import time
 from pathlib import Path
 
@@ -12,21 +10,7 @@ from rich.console import Console
 
 from .runs.rundir import latest_checkpoint
 from .runs.stops import RunInterrupted
-
-# a seed learns on one CPU (one env process): its second process adds little, and N seeds then fill N CPUs at once
-CPUS_PER_SEED = 1
-
-
-def _learn(spec_path: str, overrides: list[str], into: str) -> str:
-    """Ray task: one seed's learning run into its folder, quiet; its path."""
-    import torch
-
-    from .train.run import start_run
-
-    os.environ["OMP_NUM_THREADS"] = str(CPUS_PER_SEED)
-    torch.set_num_threads(CPUS_PER_SEED)
-    quiet = Console(file=io.StringIO())
-    return str(start_run(Path(spec_path), overrides, console=quiet, progress=False, into=Path(into)))
+from .seeds_at_once import CPUS_PER_SEED, learn_one
 
 
 def learn_on_ray(address: str, spec_path: Path, runs: list[tuple[list[str], Path]], console: Console) -> list[Path]:
@@ -39,9 +23,8 @@ def learn_on_ray(address: str, spec_path: Path, runs: list[tuple[list[str], Path
 
     connected = connect(address)
     try:
-        task = ray.remote(num_cpus=CPUS_PER_SEED, max_retries=0)(_learn)
-        workers = f"train.workers={CPUS_PER_SEED}"  # no env process beyond its CPU (the split never changes results)
-        pending = {task.remote(str(spec_path), [*o, workers], str(into)): into for o, into in runs}
+        task = ray.remote(num_cpus=CPUS_PER_SEED, max_retries=0)(learn_one)
+        pending = {task.remote(str(spec_path), o, str(into)): into for o, into in runs}
         t0 = time.perf_counter()
         console.print(f"learning {len(runs)} seeds on Ray ({address}), {CPUS_PER_SEED} CPU each", highlight=False)
         try:

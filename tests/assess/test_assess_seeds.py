@@ -1,6 +1,11 @@
 """`fastrl assess --seeds N`: learned scores as mean and spread over seeds, their agreement, and the warnings."""
 
 import json
+import os
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +19,7 @@ from fastrl.data.cohort import make_cohort
 from fastrl.spec import load_spec
 
 from ..runner.test_runner import rrd_verify
+from ..runner.test_stops import verify
 
 pytestmark = pytest.mark.slow  # trains or drives a viewer end to end
 
@@ -84,14 +90,17 @@ def cohort(tmp_path_factory):
     return folder
 
 
-def assess_two_seeds(cohort: Path, folder: Path, *more: str):
-    """`fastrl assess COHORT --seeds 2` into `folder` (runs and report); (CLI result, report path)."""
+def assess_two_seeds(cohort: Path, folder: Path, *more: str, cores: int = 1):
+    """`fastrl assess COHORT --seeds 2` into `folder` (runs and report) on a machine of `cores` cores (1: the seeds
+    one after another); (CLI result, report path)."""
     out = folder / "report" / "scores.json"
-    res = CliRunner().invoke(
-        app,
-        ["assess", str(cohort), "--spec", str(NO_EXPERT), "--top", "2", "--seeds", "2", "-o", str(out)]
-        + ["--runs", str(folder), "--no-progress", *more],
-    )
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(os, "cpu_count", lambda: cores)
+        res = CliRunner().invoke(
+            app,
+            ["assess", str(cohort), "--spec", str(NO_EXPERT), "--top", "2", "--seeds", "2", "-o", str(out)]
+            + ["--runs", str(folder), "--no-progress", *more],
+        )
     return res, out
 
 
@@ -100,6 +109,13 @@ def two_seeds(tmp_path_factory, cohort):
     """The cohort assessed with two seeds, one after another: (CLI result, report path, runs folder)."""
     folder = tmp_path_factory.mktemp("two-seeds")
     return (*assess_two_seeds(cohort, folder), folder)
+
+
+def same_scores(out: Path, serial: Path) -> None:
+    """The two reports score every trajectory alike: the same networks were learned."""
+    rows, serial_rows = (json.loads(p.read_text())["trajectories"] for p in (out, serial))
+    for key in ("reward_raw", "value_raw", "reward_sd", "value_sd", "time"):
+        assert [r[key] for r in rows] == pytest.approx([r[key] for r in serial_rows], rel=1e-9), key
 
 
 def test_assess_with_two_seeds_learns_two_scorers_and_reports_their_agreement(two_seeds, cohort):
@@ -129,6 +145,43 @@ def test_seeds_learned_at_once_on_ray_score_as_one_after_another(tmp_path, cohor
     assert "learning 2 seeds on Ray (local), 1 CPU each" in res.output
     run = next(tmp_path.glob("medial_pair/*-assess-airl-s0"))
     assert load_spec(run / "learned-s1" / "spec.yaml").train.workers == 1  # each on its one CPU
-    ray_rows, serial_rows = (json.loads(p.read_text())["trajectories"] for p in (out, two_seeds[1]))
-    for key in ("reward_raw", "value_raw", "reward_sd", "value_sd", "time"):  # same networks: the same scores
-        assert [r[key] for r in ray_rows] == pytest.approx([r[key] for r in serial_rows], rel=1e-9), key
+    same_scores(out, two_seeds[1])
+
+
+def test_seeds_learned_at_once_on_spare_cores_score_as_one_after_another(tmp_path, cohort, two_seeds):
+    res, out = assess_two_seeds(cohort, tmp_path, cores=2)
+    assert res.exit_code == 0, res.output
+    assert "learning 2 seeds, 2 at once, each in its own process" in res.output
+    run = next(tmp_path.glob("medial_pair/*-assess-airl-s0"))
+    assert [load_spec(run / f"learned-s{s}" / "spec.yaml").train.workers for s in (0, 1)] == [1, 1]
+    verify(*(run / f"learned-s{s}" / "recording.rrd" for s in (0, 1)))  # each process closed its recording
+    same_scores(out, two_seeds[1])
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="seeds learn at once only on spare cores")
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_stop_while_seeds_learn_at_once_leaves_each_a_checkpoint_and_recording(tmp_path, cohort, sig):
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "fastrl.cli", "assess", str(cohort), "--spec", str(NO_EXPERT), "--top", "2"]
+        + ["--seeds", "2", "--runs", str(tmp_path), "--no-progress", "--set", "train.timesteps=400000"]
+        + ["--set", "train.checkpoint_every=1024", "--set", "irl.generator.min_steps=400000"],
+        env={**os.environ, "CI": "1", "MUJOCO_GL": "egl"},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    t0 = time.time()
+    while len(list(tmp_path.glob("medial_pair/*/learned-s*/checkpoints/[0-9]*/state.json"))) < 2:
+        assert proc.poll() is None, proc.communicate()
+        assert time.time() - t0 < 180, "no checkpoint of both seeds"
+        time.sleep(0.2)
+    proc.send_signal(sig)  # to the command alone: it stops its seeds' processes
+    _, err = proc.communicate(timeout=180)
+    assert proc.returncode == 128 + sig and "Traceback" not in err, err
+    run = next(tmp_path.glob("medial_pair/*-assess-airl-s0"))
+    assert err.splitlines()[-1] == f"resume with: fastrl run --resume {run / 'learned-s0'}", err
+    verify(*(run / f"learned-s{s}" / "recording.rrd" for s in (0, 1)))
+    for seed in (0, 1):
+        meta = json.loads((run / f"learned-s{seed}" / "meta.json").read_text())
+        assert meta["status"] == "interrupted", meta
