@@ -3,13 +3,18 @@
     python bench/assess_speed.py --ref /work/ref-b712-assess                   # TraceLines classic, 3 pairs
     python bench/assess_speed.py --ref /work/ref-b712-assess --tasks periscoping imagecentring --repeats 1
     python bench/assess_speed.py --ref /work/ref-b712-assess --families depth mixed --seeds 1
+    python bench/assess_speed.py --ref /work/ref-1a8e-assess --ensemble 3      # `fastrl assess --seeds 3`
+    python bench/assess_speed.py --ref /work/ref-1a8e-assess --ensemble 3 --families ringing \
+        --cohort runs/bench-outside/tracelines/ringing/cohort
 
 The whole command as a user runs it, `fastrl assess COHORT --spec specs/TASK.yaml --top 10` (pictures included,
-`--set train.seed=S` for each --seeds), in a fresh process with PYTHONPATH at this tree and at --ref (a git worktree
-of the reference commit: `git worktree add /work/ref-b712-assess b712f6b`), the two interleaved, each pair's order
-alternating. The cohort is bench/validity.py's (5 levels x 10 subjects without actions, seed 0). Printed per run:
-the wall time, the generator's steps, Kendall tau-b of the learned reward and value against the skill labels, with
-the machine and its load; then the median per tree. Writes --json (docs/assess_speed.json).
+`--set train.seed=S` for each --seeds; with --ensemble N also `--seeds N`, N scorers from seed S on), in a fresh
+process with PYTHONPATH at this tree and at --ref (a git worktree of the reference commit: `git worktree add
+/work/ref-b712-assess b712f6b`), the two interleaved, each pair's order alternating. The cohort is
+bench/validity.py's (5 levels x 10 subjects without actions, seed 0), or --cohort's. Printed per run: the wall time,
+each scorer's generator steps, Kendall tau-b of the learned reward and value against the skill labels (the scorers'
+mean, with several), with the machine and its load; then the median per tree. Writes --json
+(docs/assess_speed.json).
 """
 
 from __future__ import annotations
@@ -33,12 +38,14 @@ from validity import ROOT, cohort
 HERE = Path(__file__).resolve().parents[1]
 
 
-def run_once(tree: Path, task: str, folder: Path, seed: int, sets: list[str]) -> dict:
-    """One `fastrl assess` in a fresh process importing fastrl from `tree`: wall time, steps and tau-b."""
+def run_once(tree: Path, task: str, folder: Path, seed: int, sets: list[str], ensemble: int = 1) -> dict:
+    """One `fastrl assess` (`--seeds ensemble`) in a fresh process importing fastrl from `tree`: wall time, each
+    scorer's steps and the tau-b of the scores (the scorers' mean, with several)."""
     with tempfile.TemporaryDirectory(prefix="assess-speed-") as runs:
         command = [sys.executable, "-m", "fastrl.cli", "assess", str(folder.resolve()), "--spec"]
         command += [str(tree / "fastrl" / "specs" / f"{task}.yaml"), "--top", "10", "--runs", runs, "--no-progress"]
         command += [arg for s in [f"train.seed={seed}", *sets] for arg in ("--set", s)]
+        command += ["--seeds", str(ensemble)] if ensemble > 1 else []
         env = {**os.environ, "PYTHONPATH": str(tree)}
         t0 = time.perf_counter()
         done = subprocess.run(command, env=env, cwd=runs, capture_output=True, text=True)
@@ -46,18 +53,23 @@ def run_once(tree: Path, task: str, folder: Path, seed: int, sets: list[str]) ->
         if done.returncode:
             raise RuntimeError(f"{' '.join(command)} failed:\n{done.stderr[-2000:]}")
         (report,) = Path(runs).glob("*/*/scores.json")
-        (meta,) = Path(runs).glob("*/*/learned/meta.json")
+        metas = sorted(Path(runs).glob("*/*/learned*/meta.json"))
         ranking = json.loads(report.read_text())["ranking"]
-        steps = json.loads(meta.read_text()).get("trained_timesteps")
+        steps = [json.loads(meta.read_text()).get("trained_timesteps") for meta in metas]
     taus = {k: ranking[k]["kendall_tau_b"] for k in ("reward", "value", "time")}
     return {"wall": wall, "steps": steps, "tau_b": taus, "load": os.getloadavg()[0]}
+
+
+def kilo(steps) -> str:
+    """Each scorer's steps in thousands (an int: one scorer, as the rows before --ensemble)."""
+    return " + ".join(f"{n / 1000:.0f}k" for n in (steps if isinstance(steps, list) else [steps]))
 
 
 def line(tree: str, task: str, family: str, seed: int, r: dict) -> str:
     """One run as a line."""
     t = r["tau_b"]
     return (
-        f"{task} {family} s{seed} {tree}: {r['wall']:.1f} s, {r['steps'] / 1000:.0f}k steps, "
+        f"{task} {family} s{seed} {tree}: {r['wall']:.1f} s, {kilo(r['steps'])} steps, "
         f"tau-b reward {t['reward']:.3f} value {t['value']:.3f} (time {t['time']:.3f}), load {r['load']:.2f}"
     )
 
@@ -68,6 +80,8 @@ def main() -> None:
     parser.add_argument("--tasks", nargs="+", default=["tracelines"])
     parser.add_argument("--families", nargs="+", default=["classic"])
     parser.add_argument("--seeds", nargs="+", type=int, default=[0])
+    parser.add_argument("--ensemble", type=int, default=1, help="scorers per command (`fastrl assess --seeds N`)")
+    parser.add_argument("--cohort", type=Path, help="this cohort folder instead of each family's (one --families name)")
     parser.add_argument("--repeats", type=int, default=3, help="pairs (this, reference) per task, family and seed")
     parser.add_argument("--set", dest="sets", action="append", default=[], help="spec change for this tree only")
     parser.add_argument("--json", type=Path, default=Path("docs/assess_speed.json"))
@@ -78,12 +92,14 @@ def main() -> None:
     rows = []
     for task in args.tasks:
         for family in args.families:
-            folder = cohort(task, family, ROOT)
+            folder = args.cohort or cohort(task, family, ROOT)
             for seed in args.seeds:
                 for k in range(args.repeats):
                     for name in ("this", "ref") if k % 2 == 0 else ("ref", "this"):
-                        r = run_once(trees[name], task, folder, seed, args.sets if name == "this" else [])
-                        rows.append({"tree": name, "task": task, "family": family, "seed": seed, **r})
+                        sets = args.sets if name == "this" else []
+                        r = run_once(trees[name], task, folder, seed, sets, args.ensemble)
+                        row = {"tree": name, "task": task, "family": family, "seed": seed, "ensemble": args.ensemble}
+                        rows.append({**row, **({"cohort": str(args.cohort)} if args.cohort else {}), **r})
                         print(line(name, task, family, seed, r), flush=True)
                 args.json.parent.mkdir(parents=True, exist_ok=True)
                 args.json.write_text(json.dumps({**started, "ref": str(args.ref), "rows": rows}, indent=1))
@@ -101,7 +117,7 @@ def main() -> None:
                     last = mine[-1]
                     print(
                         f"| {task} | {family} | {seed} | {name} | {statistics.median(r['wall'] for r in mine):.0f} s "
-                        f"| {walls} | {last['steps'] / 1000:.0f}k | {last['tau_b']['reward']:.2f} "
+                        f"| {walls} | {kilo(last['steps'])} | {last['tau_b']['reward']:.2f} "
                         f"| {last['tau_b']['value']:.2f} |"
                     )
 
