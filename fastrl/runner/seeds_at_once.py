@@ -13,6 +13,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from ..env.render import rendered_here
 from ..forked import Worker, outcome
 from .runs.rundir import latest_checkpoint
 from .runs.stops import EvaluationInterrupted, RunInterrupted, shielded, signal_name, stop_on_sigterm
@@ -24,9 +25,10 @@ STOP_WAIT_S, RESEND_S = 120.0, 2.0  # how long a stop waits for the seeds to sav
 
 
 def at_once(seeds: int) -> int:
-    """How many seeds learn at once on this machine: one after another on one core, else up to two per core."""
+    """How many seeds learn at once on this machine: up to two per core; one after another on one core, or once this
+    process rendered (a frame estimator learned for videos: Mesa's EGL would deadlock a forked child)."""
     cores = os.cpu_count() or 1
-    return 1 if cores < 2 else min(seeds, SEEDS_PER_CORE * cores)
+    return 1 if cores < 2 or rendered_here() else min(seeds, SEEDS_PER_CORE * cores)
 
 
 def learn_one(spec_path: str, overrides: list[str], into: str) -> str | None:
