@@ -168,8 +168,10 @@ def test_seeds_learned_at_once_on_spare_cores_score_as_one_after_another(tmp_pat
 
 
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="seeds learn at once only on spare cores")
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
-def test_a_stop_while_seeds_learn_at_once_leaves_each_a_checkpoint_and_recording(tmp_path, cohort, sig):
+@pytest.mark.parametrize(
+    ("sig", "group"), [(signal.SIGINT, False), (signal.SIGTERM, False), (signal.SIGINT, True)]
+)  # to the command alone (it stops its seeds' processes), or to them all as a terminal's Ctrl-C
+def test_a_stop_while_seeds_learn_at_once_leaves_each_a_checkpoint_and_recording(tmp_path, cohort, sig, group):
     proc = subprocess.Popen(
         [sys.executable, "-m", "fastrl.cli", "assess", str(cohort), "--spec", str(NO_EXPERT), "--top", "2"]
         + ["--seeds", "2", "--runs", str(tmp_path), "--no-progress", "--set", "train.timesteps=400000"]
@@ -179,13 +181,17 @@ def test_a_stop_while_seeds_learn_at_once_leaves_each_a_checkpoint_and_recording
         stderr=subprocess.PIPE,
         text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        start_new_session=True,
     )
     t0 = time.time()
     while len(list(tmp_path.glob("medial_pair/*/learned-s*/checkpoints/[0-9]*/state.json"))) < 2:
         assert proc.poll() is None, proc.communicate()
         assert time.time() - t0 < 180, "no checkpoint of both seeds"
         time.sleep(0.2)
-    proc.send_signal(sig)  # to the command alone: it stops its seeds' processes
+    if group:
+        os.killpg(proc.pid, sig)
+    else:
+        proc.send_signal(sig)
     _, err = proc.communicate(timeout=180)
     assert proc.returncode == 128 + sig and "Traceback" not in err, err
     run = next(tmp_path.glob("medial_pair/*-assess-airl-s0"))
