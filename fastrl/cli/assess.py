@@ -30,7 +30,7 @@ def assess_cohort(
         str | None,
         typer.Option(
             metavar="ADDR",
-            help="learn the seeds at once as Ray tasks, one CPU each: a cluster's address, or local (this machine)",
+            help="learn the seeds at once as Ray tasks, two to a CPU: a cluster's address, or local (this machine)",
         ),
     ] = None,
     set_: SetOpt = None,

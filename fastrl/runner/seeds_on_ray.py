@@ -1,5 +1,5 @@
-"""`fastrl assess --seeds N --address ADDR`: each seed's scorer learned as a Ray task, as many at once as the cluster
-has CPUs for; the run folders must be the same paths on every node (as for `fastrl score --address`)."""
+"""`fastrl assess --seeds N --address ADDR`: each seed's scorer learned as a Ray task, two to each of the cluster's
+CPUs at once; the run folders must be the same paths on every node (as for `fastrl score --address`)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from rich.console import Console
 
 from .runs.rundir import latest_checkpoint
 from .runs.stops import RunInterrupted
-from .seeds_at_once import CPUS_PER_SEED, learn_one
+from .seeds_at_once import CPUS_PER_SEED, SEEDS_PER_CORE, learn_one
 
 
 def learn_on_ray(address: str, spec_path: Path, runs: list[tuple[list[str], Path]], console: Console) -> list[Path]:
@@ -23,10 +23,11 @@ def learn_on_ray(address: str, spec_path: Path, runs: list[tuple[list[str], Path
 
     connected = connect(address)
     try:
-        task = ray.remote(num_cpus=CPUS_PER_SEED, max_retries=0)(learn_one)
+        cpus = CPUS_PER_SEED / SEEDS_PER_CORE  # two seeds to a CPU, as on this machine's cores
+        task = ray.remote(num_cpus=cpus, max_retries=0)(learn_one)
         pending = {task.remote(str(spec_path), o, str(into)): into for o, into in runs}
         t0 = time.perf_counter()
-        console.print(f"learning {len(runs)} seeds on Ray ({address}), {CPUS_PER_SEED} CPU each", highlight=False)
+        console.print(f"learning {len(runs)} seeds on Ray ({address}), {cpus:g} CPU each", highlight=False)
         try:
             while pending:
                 ready, _ = ray.wait(list(pending), num_returns=1)

@@ -142,7 +142,7 @@ def test_seeds_learned_at_once_on_ray_score_as_one_after_another(tmp_path, cohor
     pytest.importorskip("ray")  # on loopback only: tests/conftest.py sets RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0
     res, out = assess_two_seeds(cohort, tmp_path, "--address", "local")
     assert res.exit_code == 0, res.output
-    assert "learning 2 seeds on Ray (local), 1 CPU each" in res.output
+    assert "learning 2 seeds on Ray (local), 0.5 CPU each" in res.output
     run = next(tmp_path.glob("medial_pair/*-assess-airl-s0"))
     assert load_spec(run / "learned-s1" / "spec.yaml").train.workers == 1  # each on its one CPU
     same_scores(out, two_seeds[1])
