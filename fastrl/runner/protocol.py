@@ -212,8 +212,8 @@ def run_protocol(
         from .seeds_on_ray import learn_on_ray
 
         learned = learn_on_ray(address, spec_path, learning, console)
-    elif at_once(seeds) > 1:  # spare cores
-        learned = learn_at_once(spec_path, learning, console, at_once(seeds), progress)
+    elif (processes := at_once(seeds)) > 1:  # spare cores
+        learned = learn_at_once(spec_path, learning, console, processes, progress)
     else:
         learned = [start_run(spec_path, o, console=console, progress=progress, into=into) for o, into in learning]
     update_meta(run, status="scoring")

@@ -18,7 +18,7 @@ from ..forked import Worker, outcome
 from .runs.rundir import latest_checkpoint
 from .runs.stops import EvaluationInterrupted, RunInterrupted, shielded, signal_name, stop_on_sigterm
 
-CPUS_PER_SEED = 1  # a seed learns on one core (no env process beside it): its second process added little
+CPUS_PER_SEED = 1  # a seed's threads, and no env process beside it: its second process added little
 # a seed learning alone leaves part of its core idle: on 2 cores, 3 seeds at once took 103 s, 2 at a time 158 s
 SEEDS_PER_CORE = 2
 STOP_WAIT_S, RESEND_S = 120.0, 2.0  # how long a stop waits for the seeds to save, and how often it asks again
