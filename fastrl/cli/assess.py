@@ -14,10 +14,12 @@ from . import RunsOpt, SetOpt, app, err, exit_with, out
 @app.command(name="assess")
 def assess_cohort(
     inputs: Annotated[
-        list[Path],
+        list[Path] | None,
         typer.Argument(metavar="COHORT_DIR...", help="trajectory .npz files or folders", show_default=False),
-    ],
-    spec: Annotated[Path, typer.Option("--spec", metavar="SPEC", help="the task the recordings were made in")],
+    ] = None,
+    spec: Annotated[
+        Path | None, typer.Option("--spec", metavar="SPEC", help="the task the recordings were made in")
+    ] = None,
     top: Annotated[int, typer.Option("--top", metavar="K", help="learn from the K best recordings")] = 10,
     by: Annotated[
         str | None, typer.Option(help="rank by time (the stopwatch; the default), length (path) or heuristic")
@@ -45,35 +47,56 @@ def assess_cohort(
     runs: RunsOpt = Path("runs"),
     pictures: Annotated[bool, typer.Option(help="write the PNG figures and the Rerun recording")] = True,
     progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
+    resume: Annotated[
+        Path | None,
+        typer.Option(
+            metavar="RUN",
+            help="continue a stopped assessment in its folder, with its own recordings and options",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Rank recordings, learn reward, value and policy from the best K without their actions, score them all."""
     from ..agents.checkpoint_files import CheckpointMismatch
     from ..atomic import DiskFull
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
-    from ..runner.protocol import DEFAULT_BY, run_protocol
+    from ..runner.protocol import DEFAULT_BY, ScoringInterrupted, resume_protocol, run_protocol
     from ..spec import SpecError
     from .score import print_report, report_file
-    from .stops import report_stop
+    from .stops import report_stop, stop_code
 
+    if resume is not None and (inputs or spec or set_):
+        exit_with(ValueError("--resume RUN continues with the assessment's own recordings, spec and --set: give none"))
+    if resume is None and not (inputs and spec):
+        exit_with(ValueError("give the recordings to assess (COHORT_DIR...) and --spec SPEC, or --resume RUN"))
     try:
-        done = run_protocol(
-            inputs,
-            spec,
-            top,
-            by or DEFAULT_BY,
-            algorithm,
-            list(set_ or []),
-            runs,
-            report_file(output),
-            console=err,
-            progress=progress,
-            pictures=pictures,
-            seeds=seeds,
-            address=address,
-        )
-    except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace, DiskFull) as stop:
-        report_stop(stop)  # the learned run resumes with fastrl run --resume; rerun assess to score
-    except (SpecError, FileNotFoundError, ValueError, CheckpointMismatch) as e:
+        if resume is not None:
+            done = resume_protocol(resume, console=err, progress=progress, address=address)
+        else:
+            done = run_protocol(
+                inputs,
+                spec,
+                top,
+                by or DEFAULT_BY,
+                algorithm,
+                list(set_ or []),
+                runs,
+                report_file(output),
+                console=err,
+                progress=progress,
+                pictures=pictures,
+                seeds=seeds,
+                address=address,
+            )
+    except (RunInterrupted, EvaluationInterrupted, RunOutOfSpace) as stop:
+        report_stop(stop, f"fastrl assess --resume {stop.run.parent}")  # a seed's run, in the assessment's folder
+    except DiskFull as stop:
+        report_stop(stop)
+    except ScoringInterrupted as stop:
+        err.print(str(stop), markup=False)
+        err.print(f"resume with: fastrl assess --resume {stop.run}", markup=False)
+        raise typer.Exit(code=stop_code(stop.signal_name)) from None
+    except (SpecError, FileNotFoundError, ValueError, CheckpointMismatch) as e:  # RunFileError too
         exit_with(e)
     except KeyboardInterrupt:  # outside a learning run (ranking, scoring, seeds on Ray before any checkpoint)
         err.print("interrupted: run the same command again", markup=False)

@@ -16,13 +16,14 @@ def stop_code(signal_name: str) -> int:
     return 143 if signal_name == "SIGTERM" else 130
 
 
-def report_stop(stop: Exception) -> None:
-    """A stopped run in plain lines, the last one how to resume it; exit 128 + the signal, or 1 for a full disk."""
+def report_stop(stop: Exception, resume: str | None = None) -> None:
+    """A stopped run in plain lines, the last one how to resume it (`resume`: the command, if not `fastrl run
+    --resume RUN`); exit 128 + the signal, or 1 for a full disk."""
     from ..atomic import DiskFull
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
 
     if isinstance(stop, RunOutOfSpace):
-        report_out_of_space(stop)
+        report_out_of_space(stop, resume)
     if isinstance(stop, DiskFull):  # before the run started (its spec, its metadata)
         err.print(f"{stop}.", markup=False)
         raise typer.Exit(code=1)
@@ -31,11 +32,11 @@ def report_stop(stop: Exception) -> None:
     elif isinstance(stop, EvaluationInterrupted):
         saved = f"evaluation stopped; the trained policy is saved in {stop.run}/final"
     err.print(f"{stop.signal_name}: {saved}", markup=False)
-    err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
+    err.print(f"resume with: {resume or f'fastrl run --resume {stop.run}'}", markup=False)
     raise typer.Exit(code=stop_code(stop.signal_name))
 
 
-def report_out_of_space(stop) -> None:
+def report_out_of_space(stop, resume: str | None = None) -> None:
     """Say in plain sentences that the disk filled, what the recording holds and how to go on; exit 1."""
     err.print(stop.sentence() + ".", markup=False)
     if stop.recording_whole:
@@ -46,7 +47,7 @@ def report_out_of_space(stop) -> None:
             "rewrites it from its complete chunks",
             markup=False,
         )
-    err.print(f"resume with: fastrl run --resume {stop.run}", markup=False)
+    err.print(f"resume with: {resume or f'fastrl run --resume {stop.run}'}", markup=False)
     raise typer.Exit(code=1)
 
 

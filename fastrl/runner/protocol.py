@@ -17,7 +17,9 @@ from ..atomic import write_text
 from ..data.inverse import to_control_rate
 from ..data.trajectory import Trajectory, TrajectoryError
 from ..spec import load_spec
-from .runs.rundir import new_run_dir, update_meta, write_meta
+from .runs.rundir import latest_checkpoint, new_run_dir, update_meta, write_meta
+from .runs.runfiles import read_meta
+from .runs.stops import signal_name
 from .score.assessment import Assessment, assess, outputs_for
 from .score.video import VIDEO_SUFFIXES
 from .score.video_inputs import video_files, video_overrides, videos_as_trajectories
@@ -35,6 +37,14 @@ ALGORITHMS = ("airl", "gail")
 # the learned policy's final evaluation: no scripted expert beside it (nothing on this path consults one) and
 # endoscope images for 2 of its episodes, not 20 (they took 12 s and 9 s of TraceLines' 2 min); --set overrides
 EVALUATION = ("evaluate.expert=false", "evaluate.record_episodes=2")
+
+
+class ScoringInterrupted(Exception):
+    """Ctrl-C while the learned networks scored the recordings: they are kept in `run`, to resume."""
+
+    def __init__(self, run: Path, signal_name: str = "SIGINT"):
+        self.run, self.signal_name = run, signal_name
+        super().__init__(f"{signal_name}: scoring stopped; the learned networks are kept in {run}")
 
 
 @dataclass
@@ -118,6 +128,17 @@ def write_best(
     return paths
 
 
+def write_demonstrations(run: Path, spec, ranked: list, top: int, inputs: list[Path], keep_actions: bool) -> None:
+    """RUN/best: the best `top` recordings; RUN/others: the rest, if the generator starts episodes at their states."""
+    write_best(ranked[:top], run / "best", keep_actions)
+    generator = spec.irl.generator
+    if generator is not None and generator.recorded_starts and len(ranked) > top:
+        files = {path.stem: path for path in trajectory_files(inputs)}
+        hz = spec.episode.control_hz
+        rest = [(s, to_control_rate(Trajectory.load(files[s.name]), hz)) for s, _ in ranked[top:] if s.name in files]
+        write_best(rest, run / "others")
+
+
 def nothing_there(inputs: list[Path]) -> str:
     """Why inputs that hold no recording at all gave nothing to learn from, naming a folder one level down that
     holds some."""
@@ -144,12 +165,14 @@ def run_protocol(
     keep_actions: bool = False,
     seeds: int = 1,
     address: str | None = None,
+    resuming: Path | None = None,
 ) -> Protocol:
     """Rank, choose the best `top`, learn from them without actions on `seeds` training seeds (the spec's and the
     next ones; as Ray tasks at `address`, all at once where it has the CPUs; else at once on this machine's spare
     cores), score everything; return what was done. `keep_actions` (bench/learn_from_people.py's comparison) learns
-    from the recorded actions where there are."""
-    from .train.run import start_run
+    from the recorded actions where there are. `resuming`: a stopped assessment's folder, continued (resume_protocol).
+    """
+    from .train.run import learn_into
 
     console = console or Console(stderr=True)
     if by not in BY:
@@ -176,15 +199,21 @@ def run_protocol(
         first = f"; {len(skipped)} skipped, the first: {skipped[0]}"
         raise FileNotFoundError(f"no recording could be read and replayed: nothing to learn from{first}")
     chosen = ranked[:top]
-    run = run or new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
-    write_meta(run, spec, str(spec_path), {"status": "learning", "overrides": list(overrides), "kind": "assess"})
-    write_best(chosen, run / "best", keep_actions)
-    generator = spec.irl.generator
-    if generator is not None and generator.recorded_starts and len(ranked) > top:  # the rest's states as starts
-        files = {path.stem: path for path in trajectory_files(inputs)}
-        hz = spec.episode.control_hz
-        rest = [(s, to_control_rate(Trajectory.load(files[s.name]), hz)) for s, _ in ranked[top:] if s.name in files]
-        write_best(rest, run / "others")
+    if resuming is None:
+        run = run or new_run_dir(Path(root), spec, label=f"assess-{algorithm}-s{spec.train.seed}")
+        command = {
+            "spec": str(Path(spec_path).resolve()),
+            "inputs": [str(Path(p).resolve()) for p in inputs],
+            **{"top": top, "by": by, "algorithm": algorithm, "seeds": seeds, "keep_actions": keep_actions},
+            **{"output": str(output.resolve()) if output else None, "pictures": pictures},
+        }
+        extra = {"status": "learning", "overrides": list(overrides), "kind": "assess", "assess": command}
+        write_meta(run, spec, str(spec_path), extra)
+        write_demonstrations(run, spec, ranked, top, inputs, keep_actions)
+    else:  # its best and others as written when it began, whatever the spec file says now
+        run = resuming
+        update_meta(run, status="learning")
+    if (run / "others").is_dir():
         overrides = [*overrides, f"irl.demonstrations.others={run / 'others'}"]
     rows = [{"file": s.name, "subject": s.subject, "skill": s.skill, **_criterion(s)} for s, _ in chosen]
     why = (
@@ -208,6 +237,9 @@ def run_protocol(
         )
         for seed in trained
     ]
+    if resuming is not None:
+        for _, into in learning:
+            console.print(f"{into.name}: {_where(into)}", markup=False, highlight=False)
     if address is not None:
         from .seeds_on_ray import learn_on_ray
 
@@ -215,15 +247,18 @@ def run_protocol(
     elif (processes := at_once(seeds)) > 1:  # spare cores
         learned = learn_at_once(spec_path, learning, console, processes, progress)
     else:
-        learned = [start_run(spec_path, o, console=console, progress=progress, into=into) for o, into in learning]
+        learned = [learn_into(spec_path, o, into, console=console, progress=progress) for o, into in learning]
     update_meta(run, status="scoring")
     scores = output or run / "scores.json"
-    if seeds == 1:
-        result = assess(
-            list(inputs), run=learned[0], output=scores, console=console, progress=progress, pictures=pictures
-        )
-    else:
-        result = assess_seeds(inputs, learned, trained, scores, console, progress, pictures)
+    try:
+        if seeds == 1:
+            result = assess(
+                list(inputs), run=learned[0], output=scores, console=console, progress=progress, pictures=pictures
+            )
+        else:
+            result = assess_seeds(inputs, learned, trained, scores, console, progress, pictures)
+    except KeyboardInterrupt as stop:
+        raise ScoringInterrupted(run, signal_name(stop)) from None
     summary = {
         "spec": spec.name,
         "by": by,
@@ -240,6 +275,43 @@ def run_protocol(
     write_text(run / "protocol.json", json.dumps(summary, indent=2, default=float))
     update_meta(run, status="done")
     return Protocol(run, learned, rows, why, result, skipped)
+
+
+def resume_protocol(run: Path, console: Console | None = None, progress: bool = True, address=None) -> Protocol:
+    """Continue a stopped `fastrl assess` in its folder with its own inputs and options: each seed learned is kept,
+    each begun resumes from its checkpoint, the rest start; then everything is scored."""
+    run = Path(run)
+    meta = read_meta(run)
+    command = meta.get("assess")
+    if command is None:
+        raise ValueError(f"{run} was not made by fastrl assess (its meta.json names no assessment): nothing to resume")
+    return run_protocol(
+        [Path(p) for p in command["inputs"]],
+        Path(command["spec"]),
+        command["top"],
+        command["by"],
+        command["algorithm"],
+        meta.get("overrides", []),
+        run.parent,
+        Path(command["output"]) if command["output"] else None,
+        console=console,
+        progress=progress,
+        pictures=command["pictures"],
+        keep_actions=command["keep_actions"],
+        seeds=command["seeds"],
+        address=address,
+        resuming=run,
+    )
+
+
+def _where(into: Path) -> str:
+    """How far a seed's run in `into` got: what resuming does with it."""
+    if not into.exists():
+        return "starts"
+    if read_meta(into).get("status") == "done":
+        return "learned, kept"
+    checkpoint = latest_checkpoint(into)
+    return f"resumes from {int(checkpoint.name)} timesteps" if checkpoint else "starts again (no checkpoint)"
 
 
 def assess_seeds(

@@ -32,17 +32,18 @@ def at_once(seeds: int) -> int:
 
 
 def learn_one(spec_path: str, overrides: list[str], into: str) -> str | None:
-    """One seed's learning run into its folder, quiet, on one core's threads; its path, or None if it was stopped."""
+    """One seed's learning run into its folder (or its resumption there), quiet, on one core's threads; its path, or
+    None if it was stopped."""
     import torch
 
-    from .train.run import start_run
+    from .train.run import learn_into
 
     os.environ["OMP_NUM_THREADS"] = str(CPUS_PER_SEED)
     torch.set_num_threads(CPUS_PER_SEED)
     quiet = Console(file=io.StringIO())
-    workers = f"train.workers={CPUS_PER_SEED}"  # the split never changes results
-    try:
-        return str(start_run(Path(spec_path), [*overrides, workers], console=quiet, progress=False, into=Path(into)))
+    try:  # on one process: the split never changes results
+        done = learn_into(Path(spec_path), overrides, Path(into), console=quiet, progress=False, workers=CPUS_PER_SEED)
+        return str(done)
     except (RunInterrupted, EvaluationInterrupted):  # saved already; the parent names where to resume
         return None
 

@@ -167,6 +167,15 @@ def test_seeds_learned_at_once_on_spare_cores_score_as_one_after_another(tmp_pat
     same_scores(out, two_seeds[1])
 
 
+def wait_for_checkpoints(proc: subprocess.Popen, runs: Path, seeds: int = 2) -> None:
+    """Until each seed of the assessment running in `proc` (into `runs`) has saved a checkpoint."""
+    t0 = time.time()
+    while len(list(runs.glob("medial_pair/*/learned-s*/checkpoints/[0-9]*/state.json"))) < seeds:
+        assert proc.poll() is None, proc.communicate()
+        assert time.time() - t0 < 180, "no checkpoint of every seed"
+        time.sleep(0.2)
+
+
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="seeds learn at once only on spare cores")
 @pytest.mark.parametrize(
     ("sig", "group"), [(signal.SIGINT, False), (signal.SIGTERM, False), (signal.SIGINT, True)]
@@ -183,11 +192,7 @@ def test_a_stop_while_seeds_learn_at_once_leaves_each_a_checkpoint_and_recording
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
         start_new_session=True,
     )
-    t0 = time.time()
-    while len(list(tmp_path.glob("medial_pair/*/learned-s*/checkpoints/[0-9]*/state.json"))) < 2:
-        assert proc.poll() is None, proc.communicate()
-        assert time.time() - t0 < 180, "no checkpoint of both seeds"
-        time.sleep(0.2)
+    wait_for_checkpoints(proc, tmp_path)
     if group:
         os.killpg(proc.pid, sig)
     else:
@@ -195,7 +200,7 @@ def test_a_stop_while_seeds_learn_at_once_leaves_each_a_checkpoint_and_recording
     _, err = proc.communicate(timeout=180)
     assert proc.returncode == 128 + sig and "Traceback" not in err, err
     run = next(tmp_path.glob("medial_pair/*-assess-airl-s0"))
-    assert err.splitlines()[-1] == f"resume with: fastrl run --resume {run / 'learned-s0'}", err
+    assert err.splitlines()[-1] == f"resume with: fastrl assess --resume {run}", err
     verify(*(run / f"learned-s{s}" / "recording.rrd" for s in (0, 1)))
     for seed in (0, 1):
         meta = json.loads((run / f"learned-s{seed}" / "meta.json").read_text())

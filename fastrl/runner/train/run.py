@@ -20,7 +20,7 @@ from ...model.compiler import CompiledTask, compile_task
 from ...spec import load_spec
 from ...spec.models import TaskSpec
 from ..runs.rundir import clean_leftovers, latest_checkpoint, new_run_dir, update_meta, write_meta, write_spec
-from ..runs.runfiles import read_metrics, read_run_spec, read_state, require
+from ..runs.runfiles import read_meta, read_metrics, read_run_spec, read_state, require
 from ..runs.stops import (
     EvaluationInterrupted,
     RunInterrupted,
@@ -37,7 +37,7 @@ from .learner import build_learner
 from .monitoring import training_monitor
 from .warm import warm_start_run
 
-__all__ = ["EvaluationInterrupted", "RunInterrupted", "RunOutOfSpace", "resume_run", "start_run"]
+__all__ = ["EvaluationInterrupted", "RunInterrupted", "RunOutOfSpace", "learn_into", "resume_run", "start_run"]
 
 
 def start_run(
@@ -66,13 +66,21 @@ def start_run(
         return _train_and_evaluate(run, spec, task, None, console or Console(), progress, expert=expert)
 
 
-def resume_run(run: Path, console: Console | None = None, progress: bool = True, timesteps: int | None = None) -> Path:
-    """Continue a run from its newest whole checkpoint (naming damaged ones) to its budget; evaluate and record.
+def resume_run(
+    run: Path,
+    console: Console | None = None,
+    progress: bool = True,
+    timesteps: int | None = None,
+    workers: int | None = None,
+) -> Path:
+    """Continue a run from its newest whole checkpoint (naming damaged ones) to its budget (`timesteps`: a new one),
+    on `workers` processes if given (the split never changes results); evaluate and record.
 
     A damaged spec.yaml or meta.json raises RunFileError before anything is written."""
     run = Path(run)
     console = console or Console()
-    spec = read_run_spec(run, [f"train.timesteps={timesteps}"] if timesteps else [])
+    changed = [f"train.timesteps={timesteps}"] * bool(timesteps) + [f"train.workers={workers}"] * bool(workers)
+    spec = read_run_spec(run, changed)
     for problem in require(run, {"spec.yaml", "meta.json"}):
         if problem.path.parent.name == "checkpoints":
             continue  # named below, as resume passes over it
@@ -83,7 +91,7 @@ def resume_run(run: Path, console: Console | None = None, progress: bool = True,
         )
         console.print(f"note: {problem.path}: {problem.fault}; {then}", markup=False, highlight=False)
     task = compile_task(spec)
-    if timesteps:
+    if changed:
         write_spec(run, spec, task.xml)
     clean_leftovers(run)
     skipped: list[str] = []
@@ -94,6 +102,18 @@ def resume_run(run: Path, console: Console | None = None, progress: bool = True,
         console.print(f"{run} has no whole checkpoint: training starts again from 0 timesteps", markup=False)
     with stop_on_sigterm():
         return _train_and_evaluate(run, spec, task, ckpt, console, progress, resuming=True)
+
+
+def learn_into(
+    spec_path, overrides, into: Path, *, console: Console, progress: bool = True, workers: int | None = None
+) -> Path:
+    """The run in `into`: kept if done, resumed from its checkpoint if begun, else started there."""
+    more = [f"train.workers={workers}"] if workers else []
+    if not into.exists():
+        return start_run(spec_path, [*overrides, *more], console=console, progress=progress, into=into)
+    if read_meta(into).get("status") == "done":
+        return into
+    return resume_run(into, console=console, progress=progress, workers=workers)
 
 
 def _open_recorder(run: Path, spec: TaskSpec, task: CompiledTask, resumed_at: int | None) -> RunRecorder:
