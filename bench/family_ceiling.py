@@ -17,7 +17,7 @@ against the labels of:
   `fastrl assess` learns from): the motion's typicality, how far a trajectory's duration, path length, speed, turn
   rate and jerk lie from theirs, each in units of their spread there, summed in log; and the motion's likelihood,
   the log-density of each of its steps' motion (speed, turn rate and their changes since the step before, in log)
-  under a Gaussian kernel density of their steps', summed over the trajectory.
+  under a Gaussian kernel density of their steps', summed over the trajectory (`fastrl assess`'s motion score).
 A family on which even the supervised scorer stays under 0.8 cannot meet issue 43's bar (learned reward and value
 >= 0.8) through what these summaries hold: its labels say less about the trajectories than the bar asks of a score.
 A score without ties reaches at most 0.90 on a 5 x 10 cohort (the labels tie within a level).
@@ -83,25 +83,13 @@ def typicality(rows: list[dict]) -> np.ndarray:
     return -np.log1p(np.abs((x - np.median(best, 0)) / spread)).sum(1)
 
 
-def step_motion(obs: np.ndarray, columns: dict[str, list[int]]) -> np.ndarray:
-    """Each step's camera speed and turn rate, and how much each changed since the step before."""
-    speed = np.linalg.norm(obs[:, columns["tip_vel"]], axis=1)
-    turn = np.linalg.norm(obs[:, columns["tip_quat_rate"]], axis=1)
-    change = np.abs(np.diff(np.stack([speed, turn], 1), axis=0, prepend=np.stack([speed, turn], 1)[:1]))
-    return np.column_stack([speed, turn, change])
-
-
 def motion_likelihood(steps: list[np.ndarray], own: list[int], best: list[int]) -> np.ndarray:
-    """Label-free: each trajectory's summed log-density of its steps' motion (in log, standardised) under a Gaussian
-    kernel density of the best 10's own steps; higher moves more as they do, for less time."""
-    from scipy.stats import gaussian_kde
+    """Label-free: each trajectory's motion likelihood (fastrl.assess.motion, the score `fastrl assess` reports)
+    under the best 10's own steps."""
+    from fastrl.assess.motion import MotionModel
 
-    ref = np.concatenate([steps[i][: own[i]] for i in best])
-    floor = np.maximum(np.median(ref, 0) * 0.05, 1e-6)  # log of a motion at rest
-    logged = np.log(ref + floor)
-    mean, spread = logged.mean(0), logged.std(0) + 1e-9
-    density = gaussian_kde(((logged - mean) / spread).T)
-    return np.array([density.logpdf(((np.log(s + floor) - mean) / spread).T).sum() for s in steps])
+    model = MotionModel.fit([steps[i][: own[i]] for i in best])
+    return np.array([model.log_likelihood(s) for s in steps])
 
 
 def observation_columns(spec) -> dict[str, list[int]]:
@@ -137,11 +125,12 @@ def supervised(features: np.ndarray, labels: np.ndarray) -> float:
 def family_row(task: str, family: str, root: Path, make=cohort) -> dict:
     """Every summary's tau-b, the best single one, and the supervised scorer's, for one family's cohort (made by
     `make`: bench/validity.py's or bench/outside_cohorts.py's)."""
+    from fastrl.assess.motion import motion_columns, step_motion
     from fastrl.assess.scoring import Scorer
     from fastrl.spec import load_spec
 
     spec = load_spec(f"specs/{task}.yaml")
-    scorer, columns = Scorer(spec), observation_columns(spec)
+    scorer, columns, motion = Scorer(spec), observation_columns(spec), motion_columns(spec)
     rows, labels, steps, own = [], [], [], []
     for f in sorted(make(task, family, root).glob("*.npz")):
         traj = scorer.load_file(f)
@@ -149,7 +138,7 @@ def family_row(task: str, family: str, root: Path, make=cohort) -> dict:
         own.append(min(len(traj.time), len(obs)))
         rows.append(summaries(scored, obs, own[-1], columns))
         labels.append(scored.skill)
-        steps.append(step_motion(obs, columns))
+        steps.append(step_motion(obs, motion))
     labels = np.asarray(labels, float)
     taus = {k: tau([r[k] for r in rows], labels) for k in rows[0]}
     usable = {k: t for k, t in taus.items() if t is not None}

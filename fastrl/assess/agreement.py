@@ -41,7 +41,7 @@ def _z(x: np.ndarray) -> np.ndarray:
     return (x - np.nanmean(x)) / sd if sd > 0 else np.zeros_like(x)
 
 
-def combine(reports: list[dict], seeds: list[int], learned: tuple[str, ...] = ("reward", "value")) -> dict:
+def combine(reports: list[dict], seeds: list[int], learned: tuple[str, ...] = ("reward", "value", "motion")) -> dict:
     """One report from per-seed reports of the same files: the learned scores as mean ± sd over seeds (the ranking
     uses the mean of each seed's standardised raw score), the seeds' agreement, the agreement of each learned
     score with the simple metrics, and warnings."""
@@ -54,9 +54,12 @@ def combine(reports: list[dict], seeds: list[int], learned: tuple[str, ...] = ("
         shown = np.array([_column(rep, key, files) for rep in reports])
         ranked = np.array([_ranked(rep, key, files) for rep in reports])
         ensemble = np.mean([_z(r) for r in ranked], axis=0)
-        raw = np.nanmean([_column(rep, key + "_raw", files) for rep in reports], 0)
+        normalised = any(key + "_raw" in r for r in first["trajectories"])  # motion is raw only
+        raw = np.nanmean([_column(rep, key + "_raw" if normalised else key, files) for rep in reports], 0)
         for row, mean, sd, r, e in zip(rows, np.nanmean(shown, 0), np.nanstd(shown, 0), raw, ensemble):
-            row[key], row[key + "_sd"], row[key + "_raw"], row[key + "_z"] = map(_finite, (mean, sd, r, e))
+            row[key], row[key + "_sd"], row[key + "_z"] = map(_finite, (mean, sd, e))
+            if normalised:
+                row[key + "_raw"] = _finite(r)
         pairs = [_tau(ranked[i], ranked[j]) for i, j in combinations(range(len(reports)), 2)]
         pairs = [p for p in pairs if p is not None]
         agreement[key] = {

@@ -89,6 +89,7 @@ def build_report(scored: list[TrajectoryScores], references: dict, problems: lis
         "grouped_by": by,
         "scores": list(keys),
         "normalisation": "heuristic, reward, value: 0 = random policy, 1 = scripted expert; "
+        "motion: summed log-likelihood of each step's motion under the recordings learned from; "
         "subtasks: fraction done; path_length m, time s, smoothness = log dimensionless jerk",
         "groups": subject_table(grouped, keys),
         "trajectories": rows,

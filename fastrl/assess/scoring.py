@@ -16,16 +16,20 @@ from ..spec import task_hash
 from ..spec.anatomy import anatomy_vertices
 from ..spec.models import TaskSpec
 from .kinematic import log_dimensionless_jerk, path_length
+from .motion import FILE as MOTION_FILE
+from .motion import MotionModel, motion_columns, step_motion
 from .tour import tour_metrics
 
-SCORES = ("heuristic", "reward", "value", "potential", "subtasks", "path_length", "time", "smoothness")
+SCORES = ("heuristic", "reward", "value", "potential", "motion", "subtasks", "path_length", "time", "smoothness")
 NORMALISED = ("heuristic", "reward", "value", "potential")  # 0 = random policy, 1 = scripted expert
-LEARNED = ("reward", "value", "potential")  # need a run's networks; potential: shaped AIRL only
+# need a run's networks; potential: shaped AIRL only; motion: a run of fastrl assess (its recordings' motion)
+LEARNED = ("reward", "value", "potential", "motion")
 HIGHER_IS_BETTER = {
     "heuristic": True,
     "reward": True,
     "value": True,
     "potential": True,
+    "motion": True,
     "subtasks": True,
     "path_length": False,
     "time": False,
@@ -91,9 +95,13 @@ class Scorer:
             self.anatomy = cKDTree(anatomy_vertices(spec.scene))
 
     def attach(self, networks) -> None:
-        """Score with a run's networks from now on (None: heuristic and kinematic scores only)."""
+        """Score with a run's networks from now on (None: heuristic and kinematic scores only), and with the motion
+        model beside them, if there is one."""
         self.networks = networks
         self.learned = networks is not None and networks.kind is not None
+        self.motion, self.motion_columns = None, motion_columns(self.spec)
+        if networks is not None and self.motion_columns and (networks.directory / MOTION_FILE).is_file():
+            self.motion = MotionModel.load(networks.directory / MOTION_FILE)
 
     def tip_path(self, portal: np.ndarray) -> np.ndarray:
         """Camera positions along portal coordinates (forward kinematics on a scratch copy)."""
@@ -126,6 +134,7 @@ class Scorer:
             "reward": None,
             "value": None,
             "potential": None,
+            "motion": None,
         }
         if self.anatomy is not None:
             scores.update(tour_metrics(tip, done.contacts.tolist(), self.anatomy, self.spec.scene.radius))
@@ -139,9 +148,12 @@ class Scorer:
         return TrajectoryScores(name or str(traj.meta.get("subject", "")), meta, scores, time, tip), done.observations
 
     def add_learned(self, scored: TrajectoryScores, obs: np.ndarray) -> None:
-        """Fill the learned reward, value and potential of a replayed trajectory (nothing without learned networks)."""
+        """Fill the learned reward, value, potential and motion of a replayed trajectory (nothing without learned
+        networks)."""
         if self.learned:
             with_learned(scored, learned_scores(self.networks, obs, subtasks_reached(scored.meta)))
+        if self.motion is not None:
+            scored.scores["motion"] = self.motion.log_likelihood(step_motion(obs, self.motion_columns))
 
     def load_file(self, path: Path) -> Trajectory:
         """Load and check one file; TrajectoryError or ValueError name the file and the problem."""

@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 from rich.console import Console
 
+from ..assess.motion import FILE as MOTION_FILE
+from ..assess.motion import MotionModel, motion_columns, step_motion
 from ..assess.report import csv_text, trajectory_files
 from ..assess.scoring import Scorer, TrajectoryScores, foreign_problem
 from ..atomic import write_text
@@ -139,6 +141,22 @@ def write_demonstrations(run: Path, spec, ranked: list, top: int, inputs: list[P
         write_best(rest, run / "others")
 
 
+def write_motion_model(spec, best: Path, learned: list[Path]) -> None:
+    """The motion model of the recordings learned from, beside each seed's networks (so `fastrl score --run` scores
+    the motion too); nothing where the spec observes no camera velocities."""
+    columns = motion_columns(spec)
+    if columns is None:
+        return
+    scorer, steps = Scorer(spec), []
+    for path in sorted(best.glob("*.npz")):
+        traj = to_control_rate(Trajectory.load(path), spec.episode.control_hz)
+        _, obs = scorer.replayed(traj)
+        steps.append(step_motion(obs, columns)[: len(traj.time)])  # its own steps, not a stillness held after them
+    model = MotionModel.fit(steps)
+    for folder in learned:
+        model.save(folder / "networks" / MOTION_FILE)
+
+
 def nothing_there(inputs: list[Path]) -> str:
     """Why inputs that hold no recording at all gave nothing to learn from, naming a folder one level down that
     holds some."""
@@ -248,6 +266,7 @@ def run_protocol(
         learned = learn_at_once(spec_path, learning, console, processes, progress)
     else:
         learned = [learn_into(spec_path, o, into, console=console, progress=progress) for o, into in learning]
+    write_motion_model(spec, run / "best", learned)
     update_meta(run, status="scoring")
     scores = output or run / "scores.json"
     try:

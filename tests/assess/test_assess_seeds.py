@@ -127,7 +127,7 @@ def test_assess_with_two_seeds_learns_two_scorers_and_reports_their_agreement(tw
     assert (run / "learned-s0" / "networks").is_dir() and (run / "learned-s1" / "networks").is_dir()
     assert [load_spec(run / f"learned-s{s}" / "spec.yaml").train.seed for s in (0, 1)] == [0, 1]
     report = json.loads(out.read_text())
-    assert report["seeds"]["seeds"] == [0, 1] and set(report["seeds"]["agreement"]) == {"reward", "value"}
+    assert report["seeds"]["seeds"] == [0, 1] and set(report["seeds"]["agreement"]) == {"reward", "value", "motion"}
     assert all(r["reward_sd"] is not None and r["value_sd"] >= 0 for r in report["trajectories"])
     for seed in (0, 1):  # each seed's own report is kept
         assert len(json.loads((out.parent / "seeds" / f"s{seed}" / "scores.json").read_text())["trajectories"]) == 6

@@ -1,0 +1,89 @@
+"""The motion's likelihood: how much like the recordings it learned from a trajectory moves, step by step, for how
+long (RESULTS: the motion's likelihood under the recordings')."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+FILE = "motion.safetensors"  # beside the learned networks
+SPEED, TURN = "tip_vel", "tip_quat_rate"  # the observation terms a step's motion is read from
+
+
+def motion_columns(spec) -> tuple[list[int], list[int]] | None:
+    """The observation columns of the camera's velocity and quaternion rate (None where the spec observes neither, or
+    stacks frames)."""
+    from ..spec.columns import column_terms
+
+    names = column_terms(spec)
+    speed, turn = ([i for i, n in enumerate(names) if n == term] for term in (SPEED, TURN))
+    return (speed, turn) if speed and turn and spec.observation.stack == 1 else None
+
+
+def step_motion(obs: np.ndarray, columns: tuple[list[int], list[int]]) -> np.ndarray:
+    """Each step's camera speed and turn rate, and how much each changed since the step before: (n, 4)."""
+    moving = np.column_stack([np.linalg.norm(obs[:, c], axis=1) for c in columns])
+    return np.column_stack([moving, np.abs(np.diff(moving, axis=0, prepend=moving[:1]))])
+
+
+RIDGE = 1e-3  # added to the steps' correlation matrix: recordings whose features move together stay a density
+
+
+@dataclass(frozen=True, kw_only=True)
+class MotionModel:
+    """A Gaussian kernel density of the recordings' steps, in log and standardised: each kernel shaped as their
+    correlation, scaled by Scott's factor (scipy's gaussian_kde, kept invertible by RIDGE)."""
+
+    reference: np.ndarray  # (m, 4) the recordings' steps, standardised
+    floor: np.ndarray  # (4,) added before the log: 5% of the recordings' median step, a motion at rest
+    mean: np.ndarray  # (4,) of the logged steps
+    spread: np.ndarray  # (4,)
+
+    @classmethod
+    def fit(cls, steps: list[np.ndarray]) -> MotionModel:
+        """The density of every step of these recordings (step_motion's arrays)."""
+        ref = np.concatenate(steps).astype(float)
+        floor = np.maximum(np.median(ref, 0) * 0.05, 1e-6)
+        logged = np.log(ref + floor)
+        mean, spread = logged.mean(0), logged.std(0) + 1e-9
+        return cls(reference=(logged - mean) / spread, floor=floor, mean=mean, spread=spread)
+
+    def log_likelihood(self, steps: np.ndarray) -> float:
+        """The summed log-density of a trajectory's steps: each step unlike the recordings' costs more, and every
+        step costs, so the sum reads how a trainee moves and for how long."""
+        from scipy.special import logsumexp
+
+        ref = self.reference
+        m, d = ref.shape
+        factor = m ** (-1.0 / (d + 4))  # Scott's
+        cov = np.cov(ref, rowvar=False) + RIDGE * np.eye(d)
+        lower = np.linalg.cholesky(cov) * factor
+        whiten = np.linalg.inv(lower)
+        x = ((np.log(steps + self.floor) - self.mean) / self.spread) @ whiten.T
+        r = ref @ whiten.T
+        squared = (x**2).sum(1)[:, None] + (r**2).sum(1)[None, :] - 2.0 * x @ r.T
+        norm = np.log(m) + np.log(np.diag(lower)).sum() + 0.5 * d * np.log(2 * np.pi)
+        return float((logsumexp(-0.5 * np.maximum(squared, 0.0), axis=1) - norm).sum())
+
+    def save(self, path: Path) -> Path:
+        """Write the model as safetensors (atomically)."""
+        from safetensors.numpy import save
+
+        from ..atomic import atomic_write
+
+        tensors = {k: np.ascontiguousarray(getattr(self, k), dtype=np.float64) for k in self.__dataclass_fields__}
+        data = save(tensors, metadata={"format": "fastrl motion model 1"})
+        return atomic_write(Path(path), lambda f: f.write(data))
+
+    @classmethod
+    def load(cls, path: Path) -> MotionModel:
+        """Read a model save() wrote; ValueError names a file that is not one."""
+        from safetensors.numpy import load
+
+        try:
+            tensors = load(Path(path).read_bytes())
+            return cls(**{k: tensors[k] for k in cls.__dataclass_fields__})
+        except Exception as e:  # a torn or foreign file: safetensors' own errors, a missing tensor
+            raise ValueError(f"{path}: not a motion model ({type(e).__name__}: {e})") from None

@@ -1,0 +1,105 @@
+"""The motion's likelihood: a density of the recordings' steps that scores how like them, and how long, one moves."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from fastrl.assess.motion import FILE, MotionModel, motion_columns, step_motion
+from fastrl.cli import app
+from fastrl.data import Trajectory
+from fastrl.data.cohort import make_cohort, with_overlays
+from fastrl.env.fast_env import FastEnv
+from fastrl.spec import load_spec
+
+from ..conftest import spec_file
+
+NO_EXPERT = Path(__file__).parents[1] / "fixtures" / "no_expert.yaml"
+
+
+def moves(seed: int, seconds: float = 10.0, shake: float = 0.0, lag: float = 0.0) -> np.ndarray:
+    """Steps of a hand reaching from target to target at 20 Hz (step_motion's columns), shaking or lagging."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, seconds, 0.05)
+    speed = np.abs(np.sin(np.pi * t / 2)) * 0.03 + rng.normal(0, 0.001, len(t)) ** 2
+    if lag:  # a sluggish hand: the same moves, low-pass filtered
+        kernel = np.exp(-np.arange(0, 5 * lag, 0.05) / lag)
+        speed = np.convolve(speed, kernel / kernel.sum())[: len(t)]
+    speed = np.abs(speed + shake * rng.normal(0, 0.02, len(t)))
+    turn = np.abs(10 * speed + rng.normal(0, 0.02, len(t)))  # turning as it moves, not in lockstep
+    obs = np.column_stack([speed, np.zeros_like(t), np.zeros_like(t), turn, np.zeros((len(t), 3))])
+    return step_motion(obs, ([0, 1, 2], [3, 4, 5, 6]))
+
+
+def test_steps_read_speed_turn_rate_and_their_change():
+    obs = np.array([[3.0, 4.0, 0.0, 1.0, 0.0], [0.0, 0.0, 1.0, 0.0, 2.0]])
+    steps = step_motion(obs, ([0, 1, 2], [3, 4]))
+    assert steps.tolist() == [[5.0, 1.0, 0.0, 0.0], [1.0, 2.0, 4.0, 1.0]]
+
+
+def test_a_shaking_sluggish_or_slower_hand_is_less_likely_than_the_recordings():
+    model = MotionModel.fit([moves(seed) for seed in range(5)])
+    like = model.log_likelihood(moves(10))
+    assert model.log_likelihood(moves(10, shake=1.0)) < like - 50  # tremor
+    assert model.log_likelihood(moves(10, lag=1.0)) < like - 50  # a sluggish hand, the same moves
+    assert model.log_likelihood(moves(10, seconds=20.0)) < like - 50  # the same moves for twice as long
+
+
+def test_recordings_whose_features_move_in_lockstep_still_give_a_density():
+    steps = moves(0)
+    steps[:, 1], steps[:, 3] = 10 * steps[:, 0], 10 * steps[:, 2]  # turn rate always ten times the speed
+    assert np.isfinite(MotionModel.fit([steps]).log_likelihood(moves(1)))
+
+
+def test_a_model_reads_back_as_written_and_a_torn_file_is_named(tmp_path):
+    model = MotionModel.fit([moves(seed) for seed in range(3)])
+    back = MotionModel.load(model.save(tmp_path / FILE))
+    assert back.log_likelihood(moves(7)) == model.log_likelihood(moves(7))
+    torn = tmp_path / "torn.safetensors"
+    torn.write_bytes((tmp_path / FILE).read_bytes()[:100])
+    with pytest.raises(ValueError, match="torn.safetensors: not a motion model"):
+        MotionModel.load(torn)
+
+
+def test_a_spec_without_camera_velocities_has_no_motion_score():
+    assert motion_columns(load_spec(spec_file("liver_tour"))) is None
+    speed, turn = motion_columns(load_spec(spec_file("tracelines")))
+    assert len(speed) == 3 and len(turn) == 4
+
+
+def chosen(runs: Path) -> list[dict]:
+    """The recordings the assessment under `runs` learned from."""
+    return json.loads(next(runs.glob("medial_pair/*-assess-airl-s0/protocol.json")).read_text())["chosen"]
+
+
+@pytest.mark.slow  # trains end to end
+def test_assess_scores_the_motion_and_a_shaking_copy_below_its_recording(tmp_path):
+    spec = load_spec(NO_EXPERT)
+    cohort = tmp_path / "cohort"
+    cohort.mkdir()
+    trajs = list(make_cohort(spec, 3, 2, seed=0))
+    for traj in trajs:
+        Trajectory(traj.time, traj.portal, traj.meta).save(cohort / f"{traj.meta['subject']}.npz")
+    expert = trajs[-1]  # the second best: its shaking copy, a little slower, is third
+    assert expert.meta["subject"] == "L3-S02"
+    shaking = with_overlays(FastEnv(spec), expert, {"jitter": 1.0}, 0)
+    Trajectory(shaking.time, shaking.portal, {**shaking.meta, "subject": "shaking"}).save(cohort / "shaking.npz")
+
+    out = tmp_path / "report" / "scores.json"
+    args = ["assess", str(cohort), "--spec", str(NO_EXPERT), "--top", "2", "-o", str(out), "--runs", str(tmp_path)]
+    res = CliRunner().invoke(app, [*args, "--no-progress", "--no-pictures"])
+    assert res.exit_code == 0, res.output
+    report = json.loads(out.read_text())
+    assert "motion" in report["scores"] and "motion" in report["ranking"]
+    motion = {r["file"]: r["motion"] for r in report["trajectories"]}
+    assert "shaking" not in {c["file"] for c in chosen(tmp_path)}  # the motion model is the best 2's
+    assert motion["shaking"] < motion[expert.meta["subject"]] - 100
+
+    learned = next(tmp_path.glob("medial_pair/*-assess-airl-s0/learned"))
+    assert (learned / "networks" / FILE).is_file()
+    again = tmp_path / "again" / "scores.json"
+    res = CliRunner().invoke(app, ["score", "--run", str(learned), str(cohort), "-o", str(again), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert {r["file"]: r["motion"] for r in json.loads(again.read_text())["trajectories"]} == motion
