@@ -17,7 +17,8 @@ against the labels of:
   `fastrl assess` learns from): the motion's typicality, how far a trajectory's duration, path length, speed, turn
   rate and jerk lie from theirs, each in units of their spread there, summed in log; and the motion's likelihood,
   the log-density of each of its steps' motion (speed, turn rate and their changes since the step before, in log)
-  under a Gaussian kernel density of their steps', summed over the trajectory (`fastrl assess`'s motion score).
+  under a Gaussian kernel density of their steps', summed over the trajectory (`fastrl assess`'s motion score,
+  which it gives on one-scope tasks only).
 A family on which even the supervised scorer stays under 0.8 cannot meet issue 43's bar (learned reward and value
 >= 0.8) through what these summaries hold: its labels say less about the trajectories than the bar asks of a score.
 A score without ties reaches at most 0.90 on a 5 x 10 cohort (the labels tie within a level).
@@ -125,12 +126,13 @@ def supervised(features: np.ndarray, labels: np.ndarray) -> float:
 def family_row(task: str, family: str, root: Path, make=cohort) -> dict:
     """Every summary's tau-b, the best single one, and the supervised scorer's, for one family's cohort (made by
     `make`: bench/validity.py's or bench/outside_cohorts.py's)."""
-    from fastrl.assess.motion import motion_columns, step_motion
+    from fastrl.assess.motion import step_motion
     from fastrl.assess.scoring import Scorer
     from fastrl.spec import load_spec
 
     spec = load_spec(f"specs/{task}.yaml")
-    scorer, columns, motion = Scorer(spec), observation_columns(spec), motion_columns(spec)
+    scorer, columns = Scorer(spec), observation_columns(spec)
+    motion = (columns["tip_vel"], columns["tip_quat_rate"])  # the scope's, also where fastrl scores no motion
     rows, labels, steps, own = [], [], [], []
     for f in sorted(make(task, family, root).glob("*.npz")):
         traj = scorer.load_file(f)

@@ -13,13 +13,16 @@ SPEED, TURN = "tip_vel", "tip_quat_rate"  # the observation terms a step's motio
 
 
 def motion_columns(spec) -> tuple[list[int], list[int]] | None:
-    """The observation columns of the camera's velocity and quaternion rate (None where the spec observes neither, or
-    stacks frames)."""
+    """The observation columns of the camera's velocity and quaternion rate; None where the spec observes neither,
+    stacks frames, or gives the trainee instruments beside the scope (the camera's motion is then not the skill: on
+    Triangulation's pauses the likelihood read 0.10, RESULTS)."""
     from ..spec.columns import column_terms
 
+    if spec.instruments or spec.observation.stack != 1:
+        return None
     names = column_terms(spec)
     speed, turn = ([i for i, n in enumerate(names) if n == term] for term in (SPEED, TURN))
-    return (speed, turn) if speed and turn and spec.observation.stack == 1 else None
+    return (speed, turn) if speed and turn else None
 
 
 def step_motion(obs: np.ndarray, columns: tuple[list[int], list[int]]) -> np.ndarray:

@@ -65,6 +65,7 @@ def test_a_model_reads_back_as_written_and_a_torn_file_is_named(tmp_path):
 
 def test_a_spec_without_camera_velocities_has_no_motion_score():
     assert motion_columns(load_spec(spec_file("liver_tour"))) is None
+    assert motion_columns(load_spec(spec_file("triangulation"))) is None  # the hands move, not only the camera
     speed, turn = motion_columns(load_spec(spec_file("tracelines")))
     assert len(speed) == 3 and len(turn) == 4
 
