@@ -10,6 +10,7 @@ import numpy as np
 
 FILE = "motion.safetensors"  # beside the learned networks
 SPEED, TURN = "tip_vel", "tip_quat_rate"  # the observation terms a step's motion is read from
+RIDGE = 1e-3  # added to the steps' correlation matrix: recordings whose features move together stay a density
 
 
 def motion_columns(spec) -> tuple[list[int], list[int]] | None:
@@ -31,13 +32,10 @@ def step_motion(obs: np.ndarray, columns: tuple[list[int], list[int]]) -> np.nda
     return np.column_stack([moving, np.abs(np.diff(moving, axis=0, prepend=moving[:1]))])
 
 
-RIDGE = 1e-3  # added to the steps' correlation matrix: recordings whose features move together stay a density
-
-
 @dataclass(frozen=True, kw_only=True)
 class MotionModel:
     """A Gaussian kernel density of the recordings' steps, in log and standardised: each kernel shaped as their
-    correlation, scaled by Scott's factor (scipy's gaussian_kde, kept invertible by RIDGE)."""
+    correlation, scaled by Scott's factor (as scipy's gaussian_kde), kept invertible by RIDGE."""
 
     reference: np.ndarray  # (m, 4) the recordings' steps, standardised
     floor: np.ndarray  # (4,) added before the log: 5% of the recordings' median step, a motion at rest
@@ -54,8 +52,9 @@ class MotionModel:
         return cls(reference=(logged - mean) / spread, floor=floor, mean=mean, spread=spread)
 
     def log_likelihood(self, steps: np.ndarray) -> float:
-        """The summed log-density of a trajectory's steps: each step unlike the recordings' costs more, and every
-        step costs, so the sum reads how a trainee moves and for how long."""
+        """The summed log-density of a trajectory's steps: a step unlike the recordings' scores lower, and each adds
+        its log-density (below zero on average on the FAST tasks), so the sum reads how a trainee moves and for how
+        long."""
         from scipy.special import logsumexp
 
         ref = self.reference

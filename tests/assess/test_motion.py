@@ -63,7 +63,7 @@ def test_a_model_reads_back_as_written_and_a_torn_file_is_named(tmp_path):
         MotionModel.load(torn)
 
 
-def test_a_spec_without_camera_velocities_has_no_motion_score():
+def test_no_motion_score_without_camera_velocities_or_beside_instruments():
     assert motion_columns(load_spec(spec_file("liver_tour"))) is None
     assert motion_columns(load_spec(spec_file("triangulation"))) is None  # the hands move, not only the camera
     speed, turn = motion_columns(load_spec(spec_file("tracelines")))
