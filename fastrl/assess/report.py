@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from ..data.trajectory import TrajectoryError
+from .agreement import unlike_motion
 from .ranking import rank_correlations, subject_table
 from .scoring import HIGHER_IS_BETTER, LEARNED, NORMALISED, SCORES, Scorer, TrajectoryScores
 
@@ -83,6 +85,9 @@ def build_report(scored: list[TrajectoryScores], references: dict, problems: lis
         for k in NORMALISED
         if k in keys and _inverted(references, k)
     ]
+    if "motion" in keys:
+        raw = {k: [r[k + "_raw" if k in NORMALISED else k] for r in rows] for k in ("reward", "value") if k in keys}
+        warnings += unlike_motion({k: [math.nan if v is None else v for v in x] for k, x in raw.items()}, motion(rows))
     report = {
         "references": references,
         "warnings": warnings,
@@ -106,6 +111,11 @@ def build_report(scored: list[TrajectoryScores], references: dict, problems: lis
             result["level_means"] = {level: sign * m for level, m in result["level_means"].items()}
             report["ranking"][k] = {**result, "higher_is_better": HIGHER_IS_BETTER[k]}
     return report
+
+
+def motion(rows: list[dict]) -> list[float]:
+    """Each row's motion score (NaN where it has none)."""
+    return [math.nan if r["motion"] is None else r["motion"] for r in rows]
 
 
 def _inverted(references: dict, key: str) -> bool:

@@ -81,6 +81,22 @@ def test_a_learned_score_against_every_simple_metric_is_warned_of():
     assert any(w.startswith("reward: ranks against every simple metric") for w in out["warnings"])
 
 
+def test_a_learned_score_that_ranks_unlike_the_motion_is_warned_of():
+    rng = np.random.default_rng(2)
+    time = 30 - 5 * LEVELS + rng.normal(0, 0.5, 20)
+    shuffled = rng.permutation(20).astype(float)  # a reward unrelated to how the trainees move
+    seeds = []
+    for _ in range(2):
+        one = report(shuffled + rng.normal(0, 0.01, 20), LEVELS + rng.normal(0, 0.1, 20), time)
+        for row, m in zip(one["trajectories"], LEVELS * 10.0):
+            row["motion"] = m
+        seeds.append({**one, "scores": [*one["scores"], "motion"], "warnings": ["reward: ranks unlike the motion (0)"]})
+    out = combine(seeds, [0, 1])
+    unlike = [w for w in out["warnings"] if "ranks unlike the motion" in w]
+    assert len(unlike) == 1 and unlike[0].startswith("reward: ranks unlike the motion (Kendall tau")  # seed 0's dropped
+    assert out["seeds"]["agreement"]["motion"]["mean_tau"] == pytest.approx(1.0)
+
+
 @pytest.fixture(scope="module")
 def cohort(tmp_path_factory):
     """A small cohort of the test task without actions."""

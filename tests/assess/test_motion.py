@@ -104,3 +104,19 @@ def test_assess_scores_the_motion_and_a_shaking_copy_below_its_recording(tmp_pat
     res = CliRunner().invoke(app, ["score", "--run", str(learned), str(cohort), "-o", str(again), "--no-progress"])
     assert res.exit_code == 0, res.output
     assert {r["file"]: r["motion"] for r in json.loads(again.read_text())["trajectories"]} == motion
+
+
+def test_the_report_warns_of_a_learned_score_that_ranks_unlike_the_motion():
+    from fastrl.assess.report import build_report
+    from fastrl.assess.scoring import TrajectoryScores
+
+    levels = np.repeat([1, 2, 3, 4, 5], 4)
+    rng = np.random.default_rng(0)
+    scored = []
+    for i, level in enumerate(levels):
+        scores = {"heuristic": 1.0, "reward": float(rng.normal()), "value": float(level), "potential": None}
+        scores |= {"motion": 10.0 * level, "subtasks": 1.0, "path_length": 0.1, "time": 30.0 - level}
+        scored.append(TrajectoryScores(f"f{i}", {"skill": int(level)}, scores | {"smoothness": -5.0}, None, None))
+    references = {"random": {}, "expert": {}}
+    warnings = build_report(scored, references, [], learned=True)["warnings"]
+    assert [w.split(":")[0] for w in warnings if "ranks unlike the motion" in w] == ["reward"]  # value ranks as it
