@@ -26,7 +26,7 @@ from validity import ROOT, cohort
 
 def chosen_levels(task: str, family: str, root: Path, top: int) -> dict[str, list[int]]:
     """The skill levels of the best `top` of the family's cohort under each ranking rule, best first."""
-    from fastrl.runner.protocol import BY, rank_key, rank_recordings
+    from fastrl.runner.chosen import BY, rank_key, rank_recordings
     from fastrl.spec import load_spec
 
     ranked, _ = rank_recordings(load_spec(f"specs/{task}.yaml"), [cohort(task, family, root)], "time")

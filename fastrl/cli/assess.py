@@ -60,7 +60,8 @@ def assess_cohort(
     from ..agents.checkpoint_files import CheckpointMismatch
     from ..atomic import DiskFull
     from ..runner import EvaluationInterrupted, RunInterrupted, RunOutOfSpace
-    from ..runner.protocol import DEFAULT_BY, ScoringInterrupted, resume_protocol, run_protocol
+    from ..runner.chosen import DEFAULT_BY
+    from ..runner.protocol import ScoringInterrupted, resume_protocol, run_protocol
     from ..spec import SpecError
     from .score import print_report, report_file
     from .stops import report_stop, stop_code

@@ -20,7 +20,7 @@ from fastrl.assess.journal import Journal
 from fastrl.assess.references import reference_scores
 from fastrl.assess.report import build_report, score_files
 from fastrl.assess.scoring import Scorer, normalise
-from fastrl.runner.protocol import rank_recordings
+from fastrl.runner.chosen import rank_recordings
 from fastrl.runner.score import archive, assessment
 from fastrl.runner.score.archive import sample_indices
 from fastrl.runner.score.assessment import assess
