@@ -4,6 +4,7 @@ long (RESULTS: the motion's likelihood under the recordings')."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -51,22 +52,27 @@ class MotionModel:
         mean, spread = logged.mean(0), logged.std(0) + 1e-9
         return cls(reference=(logged - mean) / spread, floor=floor, mean=mean, spread=spread)
 
+    @cached_property
+    def _kernels(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+        """(whitening matrix, whitened reference, its squared norms, log normaliser): once per model, not per
+        trajectory scored."""
+        m, d = self.reference.shape
+        factor = m ** (-1.0 / (d + 4))  # Scott's
+        lower = np.linalg.cholesky(np.cov(self.reference, rowvar=False) + RIDGE * np.eye(d)) * factor
+        whiten = np.linalg.inv(lower)
+        ref = self.reference @ whiten.T
+        norm = np.log(m) + np.log(np.diag(lower)).sum() + 0.5 * d * np.log(2 * np.pi)
+        return whiten, ref, (ref**2).sum(1), float(norm)
+
     def log_likelihood(self, steps: np.ndarray) -> float:
         """The summed log-density of a trajectory's steps: a step unlike the recordings' scores lower, and each adds
         its log-density (below zero on average on the FAST tasks), so the sum reads how a trainee moves and for how
         long."""
         from scipy.special import logsumexp
 
-        ref = self.reference
-        m, d = ref.shape
-        factor = m ** (-1.0 / (d + 4))  # Scott's
-        cov = np.cov(ref, rowvar=False) + RIDGE * np.eye(d)
-        lower = np.linalg.cholesky(cov) * factor
-        whiten = np.linalg.inv(lower)
+        whiten, ref, ref_squared, norm = self._kernels
         x = ((np.log(steps + self.floor) - self.mean) / self.spread) @ whiten.T
-        r = ref @ whiten.T
-        squared = (x**2).sum(1)[:, None] + (r**2).sum(1)[None, :] - 2.0 * x @ r.T
-        norm = np.log(m) + np.log(np.diag(lower)).sum() + 0.5 * d * np.log(2 * np.pi)
+        squared = (x**2).sum(1)[:, None] + ref_squared[None, :] - 2.0 * x @ ref.T
         return float((logsumexp(-0.5 * np.maximum(squared, 0.0), axis=1) - norm).sum())
 
     def save(self, path: Path) -> Path:
