@@ -11,11 +11,11 @@ For each task and each trainee family (fastrl.data.families; `mixed`: the acted 
 cohort of 5 levels x 10 subjects is written without actions (seed 0, under ROOT/TASK/FAMILY/cohort), then
 `fastrl assess COHORT --spec specs/TASK.yaml --top 10` (AIRL, the spec's generator; `train.seed` = each --seeds)
 learns from the best 10 and scores all 50. Printed per task, family and seed: Kendall tau-b against the skill labels
-of the learned reward and value, the heuristic return, the stopwatch (time), the path length and the subtasks, with
-the sign that ranks. The protocol sees no labels and no family. With --degrade, the ranking prior's degraded copies
-of the best recordings carry those overlays less the scored family's own, so an overlay family is never ranked by
-copies made its way. Which rows chose which shipped setting is written beside the table in RESULTS.md (validity):
-a family whose row chose a setting is not held out for it. Writes --json (docs/validity.json).
+of the learned reward, value and motion, the heuristic return, the stopwatch (time), the path length and the
+subtasks, with the sign that ranks. The protocol sees no labels and no family. With --degrade, the ranking prior's
+degraded copies of the best recordings carry those overlays less the scored family's own, so an overlay family is
+never ranked by copies made its way. Which rows chose which shipped setting is written beside the table in
+RESULTS.md (validity): a family whose row chose a setting is not held out for it. Writes --json (docs/validity.json).
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from pathlib import Path
 
 from common import machine_line
 
-SCORES = ("reward", "value", "heuristic", "time", "path_length", "subtasks")
+SCORES = ("reward", "value", "motion", "heuristic", "time", "path_length", "subtasks")
 ROOT = Path("runs/bench-validity")
 
 

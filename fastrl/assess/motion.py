@@ -3,7 +3,7 @@ long (RESULTS: the motion's likelihood under the recordings')."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 
@@ -12,6 +12,7 @@ import numpy as np
 FILE = "motion.safetensors"  # beside the learned networks
 SPEED, TURN = "tip_vel", "tip_quat_rate"  # the observation terms a step's motion is read from
 RIDGE = 1e-3  # added to the steps' correlation matrix: recordings whose features move together stay a density
+ARRAYS = ("reference", "floor", "mean", "spread")  # a model's arrays; files before 2026-12-07 lack its scalars
 
 
 def motion_columns(spec) -> tuple[list[int], list[int]] | None:
@@ -27,10 +28,17 @@ def motion_columns(spec) -> tuple[list[int], list[int]] | None:
     return (speed, turn) if speed and turn else None
 
 
+def transition_motion(obs: np.ndarray, next_obs: np.ndarray, columns: tuple[list[int], list[int]]) -> np.ndarray:
+    """Each transition's camera speed and turn rate on arrival, and how much each changed on the way: (n, 4)."""
+    before, after = ([np.linalg.norm(o[:, c], axis=1) for c in columns] for o in (obs, next_obs))
+    moving = np.column_stack(after)
+    return np.column_stack([moving, np.abs(moving - np.column_stack(before))])
+
+
 def step_motion(obs: np.ndarray, columns: tuple[list[int], list[int]]) -> np.ndarray:
-    """Each step's camera speed and turn rate, and how much each changed since the step before: (n, 4)."""
-    moving = np.column_stack([np.linalg.norm(obs[:, c], axis=1) for c in columns])
-    return np.column_stack([moving, np.abs(np.diff(moving, axis=0, prepend=moving[:1]))])
+    """Each step's camera speed and turn rate, and how much each changed since the step before (none at the first):
+    (n, 4)."""
+    return transition_motion(np.concatenate([obs[:1], obs[:-1]]), obs, columns)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -42,6 +50,8 @@ class MotionModel:
     floor: np.ndarray  # (4,) added before the log: 5% of the recordings' median step, a motion at rest
     mean: np.ndarray  # (4,) of the logged steps
     spread: np.ndarray  # (4,)
+    ceiling: float = 0.0  # the highest log-density of any of the recordings' steps
+    reward_weight: float = 0.0  # what a step's log-density below the ceiling adds to the learned reward, per nat
 
     @classmethod
     def fit(cls, steps: list[np.ndarray]) -> MotionModel:
@@ -50,7 +60,12 @@ class MotionModel:
         floor = np.maximum(np.median(ref, 0) * 0.05, 1e-6)
         logged = np.log(ref + floor)
         mean, spread = logged.mean(0), logged.std(0) + 1e-9
-        return cls(reference=(logged - mean) / spread, floor=floor, mean=mean, spread=spread)
+        model = cls(reference=(logged - mean) / spread, floor=floor, mean=mean, spread=spread)
+        return replace(model, ceiling=float(model.log_density(ref).max()))
+
+    def weighing(self, reward_weight: float) -> MotionModel:
+        """The same density, adding `reward_weight` times each step's log-density below the ceiling to the reward."""
+        return replace(self, reward_weight=float(reward_weight))
 
     @cached_property
     def _kernels(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
@@ -64,16 +79,25 @@ class MotionModel:
         norm = np.log(m) + np.log(np.diag(lower)).sum() + 0.5 * d * np.log(2 * np.pi)
         return whiten, ref, (ref**2).sum(1), float(norm)
 
-    def log_likelihood(self, steps: np.ndarray) -> float:
-        """The summed log-density of a trajectory's steps: a step unlike the recordings' scores lower, and each adds
-        its log-density (below zero on average on the FAST tasks), so the sum reads how a trainee moves and for how
-        long."""
+    def log_density(self, steps: np.ndarray) -> np.ndarray:
+        """Each step's log-density (below zero on average on the FAST tasks), in chunks of 2048 steps."""
         from scipy.special import logsumexp
 
         whiten, ref, ref_squared, norm = self._kernels
         x = ((np.log(steps + self.floor) - self.mean) / self.spread) @ whiten.T
-        squared = (x**2).sum(1)[:, None] + ref_squared[None, :] - 2.0 * x @ ref.T
-        return float((logsumexp(-0.5 * np.maximum(squared, 0.0), axis=1) - norm).sum())
+        chunks = [x[i : i + 2048] for i in range(0, len(x), 2048)]
+        squared = ((c**2).sum(1)[:, None] + ref_squared[None, :] - 2.0 * c @ ref.T for c in chunks)
+        return np.concatenate([logsumexp(-0.5 * np.maximum(d, 0.0), axis=1) - norm for d in squared] or [[]])
+
+    def log_likelihood(self, steps: np.ndarray) -> float:
+        """The summed log-density of a trajectory's steps: a step unlike the recordings' scores lower, and each adds
+        its log-density, so the sum reads how a trainee moves and for how long."""
+        return float(self.log_density(steps).sum())
+
+    def reward(self, log_density: np.ndarray, weight: float | None = None) -> np.ndarray:
+        """The learned reward's motion term of steps of these log-densities: `weight` (else the model's own) times
+        each one's distance below the ceiling (never above zero for a recorded step)."""
+        return (self.reward_weight if weight is None else weight) * (log_density - self.ceiling)
 
     def save(self, path: Path) -> Path:
         """Write the model as safetensors (atomically)."""
@@ -92,6 +116,9 @@ class MotionModel:
 
         try:
             tensors = load(Path(path).read_bytes())
-            return cls(**{k: tensors[k] for k in cls.__dataclass_fields__})
+            scalars = {
+                k: float(tensors[k].ravel()[0]) for k in cls.__dataclass_fields__ if k in tensors and k not in ARRAYS
+            }
+            return cls(**{k: tensors[k] for k in ARRAYS}, **scalars)
         except Exception as e:  # a torn or foreign file: safetensors' own errors, a missing tensor
             raise ValueError(f"{path}: not a motion model ({type(e).__name__}: {e})") from None

@@ -150,10 +150,12 @@ class Scorer:
     def add_learned(self, scored: TrajectoryScores, obs: np.ndarray) -> None:
         """Fill the learned reward, value, potential and motion of a replayed trajectory (nothing without learned
         networks)."""
+        density = None if self.motion is None else self.motion.log_density(step_motion(obs, self.motion_columns))
         if self.learned:
-            with_learned(scored, learned_scores(self.networks, obs, subtasks_reached(scored.meta)))
-        if self.motion is not None:
-            scored.scores["motion"] = self.motion.log_likelihood(step_motion(obs, self.motion_columns))
+            moving = None if density is None else self.motion.reward(density[1:])
+            with_learned(scored, learned_scores(self.networks, obs, subtasks_reached(scored.meta), moving))
+        if density is not None:
+            scored.scores["motion"] = float(density.sum())
 
     def load_file(self, path: Path) -> Trajectory:
         """Load and check one file; TrajectoryError or ValueError name the file and the problem."""
@@ -204,14 +206,17 @@ def subtasks_reached(meta: dict) -> int:
     return max(1, min(meta["subtasks_done"] + 1, meta["subtasks_total"]))
 
 
-def learned_scores(networks, obs: np.ndarray, reached: int = 1) -> dict:
+def learned_scores(networks, obs: np.ndarray, reached: int = 1, motion: np.ndarray | None = None) -> dict:
     """Learned return, value and mean potential of one trajectory's observations, and the value of each state
     ("values") and reward ("rewards"); each trajectory is evaluated as one batch, so its numbers never depend on
     the others. Reward and value count from their ceilings, the best the demonstrations reached, and are summed
     per subtask `reached`: a demonstrated step earns at most zero, every step below costs, a slower trainee never
     scores higher for the time alone, and one who stops early pays the cost of each subtask reached, not of the
-    task (RESULTS: validity). Networks saved without a value ceiling keep the mean value."""
+    task (RESULTS: validity). Networks saved without a value ceiling keep the mean value. `motion`: the reward's
+    motion term of each transition (MotionModel.reward), added to the reward."""
     rewards = networks.reward(obs).astype(float) - networks.reward_ceiling
+    if motion is not None:
+        rewards = rewards + motion
     values = networks.value(obs).astype(float)
     ceiling = networks.value_ceiling
     if ceiling is not None:

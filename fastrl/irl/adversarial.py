@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import torch
 from stable_baselines3.common.callbacks import BaseCallback
@@ -22,7 +24,9 @@ class AdversarialCallback(BaseCallback):
     that many earlier ones (raw observations, normalised and scored under the current policy when drawn).
     With `scale_reward` (the spec's default: AIRL yes, GAIL no), the generator's learned reward is divided by the
     running spread of its discounted return. With `ranked` rollouts, each discriminator step adds `ranking_weight`
-    times their ranking loss on shaped AIRL's r_psi, and with `support_spread` the demonstrated states' support loss."""
+    times their ranking loss on shaped AIRL's r_psi, and with `support_spread` the demonstrated states' support loss.
+    With `motion` (raw observations, next observations -> each transition's motion log-density below the
+    demonstrations' best), it keeps the last rollout to weigh that term against the learned reward (motion_scale)."""
 
     def __init__(
         self,
@@ -36,6 +40,7 @@ class AdversarialCallback(BaseCallback):
         ranked: RankedRollouts | None = None,
         ranking_weight: float = 0.0,
         support_spread: float = 0.0,
+        motion: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
     ):
         super().__init__()
         self.fit, self.disc, self.expert, self.n_epochs = fit, fit.disc, expert, epochs
@@ -47,6 +52,7 @@ class AdversarialCallback(BaseCallback):
         self.ranking_rng = np.random.default_rng(seed + 1)
         self.support_spread = support_spread
         self._frozen_states: torch.Tensor | None = None
+        self.motion, self.last_rollout = motion, None
 
     def _on_rollout_start(self) -> None:
         self.next_obs, self.terminal, self.env_rewards, self.dones = [], [], [], []
@@ -105,6 +111,14 @@ class AdversarialCallback(BaseCallback):
         rng = self.ranking_rng
         return self.ranked.loss(self.disc, states, rng) + support_loss(self.disc, shown, rng, self.support_spread)
 
+    def motion_scale(self) -> float:
+        """The spread of the generator's learned reward over its last rollout divided by that of the rollout's motion
+        log-density: what a nat of motion weighs in the learned reward (0 before the first rollout)."""
+        if self.last_rollout is None:
+            return 0.0
+        obs, nxt, learned = self.last_rollout
+        return float(learned.std() / max(float(self.motion(obs, nxt).std()), 1e-9))
+
     def _on_rollout_end(self) -> None:
         buf = self.model.rollout_buffer
         n, e = buf.buffer_size, buf.n_envs
@@ -125,6 +139,8 @@ class AdversarialCallback(BaseCallback):
             reward = self.disc.generator_reward(s, s2, t, lp) + self.disc.terminal_bonus(t)
             learned = reward.numpy().reshape(n, e)
         self.stats["irl/generator_reward"] = float(learned.mean())
+        if self.motion is not None:  # raw copies now: the buffer and the normalisation move on
+            self.last_rollout = np.array(original_obs(self.model, obs)), original_obs(self.model, nxt), learned.ravel()
         if self.scale_reward:
             self.scale = self.scale or ReturnScale(e, self.model.gamma)
             learned = self.scale(learned, np.stack(self.dones))

@@ -1,5 +1,5 @@
 """The recordings `fastrl assess` learns from: every one ranked by a rule, the best K written without their actions,
-the rest where the generator starts, and the motion model of the best (fastrl.runner.protocol runs the protocol)."""
+the rest where the generator starts (fastrl.runner.protocol runs the protocol)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..assess.motion import FILE as MOTION_FILE
-from ..assess.motion import MotionModel, motion_columns, step_motion
 from ..assess.report import trajectory_files
 from ..assess.scoring import Scorer, TrajectoryScores, foreign_problem
 from ..data.inverse import to_control_rate
@@ -102,22 +100,6 @@ def write_demonstrations(run: Path, spec, ranked: list, top: int, inputs: list[P
         hz = spec.episode.control_hz
         rest = [(s, to_control_rate(Trajectory.load(files[s.name]), hz)) for s, _ in ranked[top:] if s.name in files]
         write_best(rest, run / "others")
-
-
-def write_motion_model(spec, best: Path, learned: list[Path]) -> None:
-    """The motion model of the recordings learned from, beside each seed's networks (so `fastrl score --run` scores
-    the motion too); nothing where the spec observes no camera velocities."""
-    columns = motion_columns(spec)
-    if columns is None:
-        return
-    scorer, steps = Scorer(spec), []
-    for path in sorted(best.glob("*.npz")):
-        traj = to_control_rate(Trajectory.load(path), spec.episode.control_hz)
-        _, obs = scorer.replayed(traj)
-        steps.append(step_motion(obs, columns)[: len(traj.time)])  # its own steps, not a stillness held after them
-    model = MotionModel.fit(steps)
-    for folder in learned:
-        model.save(folder / "networks" / MOTION_FILE)
 
 
 def nothing_there(inputs: list[Path]) -> str:

@@ -20,7 +20,6 @@ from .chosen import (
     nothing_there,
     rank_recordings,
     write_demonstrations,
-    write_motion_model,
 )
 from .runs.rundir import latest_checkpoint, new_run_dir, update_meta, write_meta
 from .runs.runfiles import read_meta
@@ -154,7 +153,6 @@ def run_protocol(
         learned = learn_at_once(spec_path, learning, console, processes, progress)
     else:
         learned = [learn_into(spec_path, o, into, console=console, progress=progress) for o, into in learning]
-    write_motion_model(spec, run / "best", learned)
     update_meta(run, status="scoring")
     scores = output or run / "scores.json"
     try:

@@ -96,6 +96,16 @@ class DiscriminatorSettings(Strict):
         "with Gaussian noise of this spread on its normalised observation (a support prior: what the "
         "demonstrations never do ranks below what they do nearby; normalised observations are clipped at 10); 0: none",
     )
+    motion: float = Field(
+        0.0,
+        ge=0,
+        le=10,
+        description="on a task that observes the camera's velocities, with a PPO generator: the learned reward "
+        "scored adds this weight times each step's motion log-density below the demonstrations' best (the density "
+        "of their steps' speed, turn rate and its change: fastrl.assess.motion), in units of the generator's reward "
+        "spread over its last rollout; the generator learns from the discriminator alone (trained with the term, "
+        "the value lost 0.20 on tremor: RESULTS, the motion in the reward); 0: none",
+    )
     average_every: int = Field(
         50000,
         ge=0,

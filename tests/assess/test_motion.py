@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from fastrl.assess.motion import FILE, MotionModel, motion_columns, step_motion
+from fastrl.assess.motion import FILE, MotionModel, motion_columns, step_motion, transition_motion
 from fastrl.cli import app
 from fastrl.data import Trajectory
 from fastrl.data.cohort import make_cohort, with_overlays
@@ -37,6 +37,35 @@ def test_steps_read_speed_turn_rate_and_their_change():
     obs = np.array([[3.0, 4.0, 0.0, 1.0, 0.0], [0.0, 0.0, 1.0, 0.0, 2.0]])
     steps = step_motion(obs, ([0, 1, 2], [3, 4]))
     assert steps.tolist() == [[5.0, 1.0, 0.0, 0.0], [1.0, 2.0, 4.0, 1.0]]
+
+
+def test_a_transition_reads_the_motion_of_its_arrival_as_the_step_there():
+    obs = np.abs(np.random.default_rng(0).normal(size=(6, 7)))
+    columns = ([0, 1, 2], [3, 4, 5, 6])
+    assert np.array_equal(transition_motion(obs[:-1], obs[1:], columns), step_motion(obs, columns)[1:])
+
+
+def test_no_recorded_step_lies_above_the_ceiling_and_the_reward_term_counts_down_from_it(tmp_path):
+    recorded = [moves(seed) for seed in range(3)]
+    model = MotionModel.fit(recorded)
+    density = model.log_density(np.concatenate(recorded))
+    assert density.max() == pytest.approx(model.ceiling)
+    assert not model.reward(density).any()  # unweighed: no reward term
+    weighed = model.weighing(2.0)
+    assert np.allclose(weighed.reward(density), 2.0 * (density - model.ceiling)) and weighed.reward(density).max() == 0
+    shaking = weighed.reward(weighed.log_density(moves(10, shake=1.0)))
+    assert shaking.mean() < weighed.reward(weighed.log_density(moves(10))).mean() - 1.0
+    back = MotionModel.load(weighed.save(tmp_path / FILE))
+    assert (back.ceiling, back.reward_weight) == (model.ceiling, 2.0)
+
+
+def test_a_model_written_before_the_reward_term_reads_back_without_one(tmp_path):
+    from safetensors.numpy import save_file
+
+    model = MotionModel.fit([moves(0)])
+    save_file({k: getattr(model, k) for k in ("reference", "floor", "mean", "spread")}, tmp_path / FILE)
+    old = MotionModel.load(tmp_path / FILE)
+    assert old.reward_weight == 0.0 and old.log_likelihood(moves(1)) == model.log_likelihood(moves(1))
 
 
 def test_a_shaking_sluggish_or_slower_hand_is_less_likely_than_the_recordings():
@@ -120,3 +149,36 @@ def test_the_report_warns_of_a_learned_score_that_ranks_unlike_the_motion():
     references = {"random": {}, "expert": {}}
     warnings = build_report(scored, references, [], learned=True)["warnings"]
     assert [w.split(":")[0] for w in warnings if "ranks unlike the motion" in w] == ["reward"]  # value ranks as it
+
+
+@pytest.mark.slow  # trains end to end, twice
+def test_the_motion_term_weighs_in_the_learned_reward_and_leaves_the_generator_as_it_was(tmp_path):
+    from fastrl.assess.scoring import Scorer, subtasks_reached
+
+    spec = load_spec(NO_EXPERT)
+    cohort = tmp_path / "cohort"
+    cohort.mkdir()
+    for traj in make_cohort(spec, 3, 2, seed=0):
+        Trajectory(traj.time, traj.portal, traj.meta).save(cohort / f"{traj.meta['subject']}.npz")
+
+    def assess(name: str, *sets: str) -> tuple[dict, Path]:
+        """Each trajectory's report row and the learned run of an assessment with these spec changes."""
+        out, runs = tmp_path / name / "scores.json", tmp_path / name
+        args = ["assess", str(cohort), "--spec", str(NO_EXPERT), "--top", "2", "-o", str(out), "--runs", str(runs)]
+        res = CliRunner().invoke(app, [*args, *sets, "--no-progress", "--no-pictures"])
+        assert res.exit_code == 0, res.output
+        rows = {r["file"]: r for r in json.loads(out.read_text())["trajectories"]}
+        return rows, next(runs.glob("medial_pair/*-assess-airl-s0/learned"))
+
+    weighed, learned = assess("weighed", "--set", "irl.discriminator.motion=2")
+    plain, _ = assess("plain")
+    model = MotionModel.load(learned / "networks" / FILE)
+    assert model.reward_weight > 0
+    scorer = Scorer(spec)
+    for path in sorted(cohort.glob("*.npz")):
+        scored, obs = scorer.replayed(scorer.load_file(path))
+        term = model.reward(model.log_density(step_motion(obs, motion_columns(spec)))[1:]).sum()
+        row, before = weighed[path.stem], plain[path.stem]
+        assert term < 0
+        assert row["reward_raw"] == pytest.approx(before["reward_raw"] + term / subtasks_reached(scored.meta))
+        assert (row["value_raw"], row["motion"]) == (before["value_raw"], before["motion"])  # the same generator

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, partial
 from math import isnan, nan
 from pathlib import Path
 
+import numpy as np
 from rich.console import Console
 from rich.markup import escape
 from stable_baselines3.common.base_class import BaseAlgorithm
@@ -16,6 +17,7 @@ from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 from ...agents.anchor import CloneAnchor
 from ...agents.bc import action_accuracy, behaviour_clone
 from ...agents.sb3 import build_model, make_vec_env
+from ...assess.motion import MotionModel, motion_columns, transition_motion
 from ...data.inverse import to_control_rate
 from ...data.recordings import load_recordings, with_actions
 from ...data.replay import demonstration_pairs
@@ -52,6 +54,16 @@ class Learner:
     demos: list[Trajectory] = field(default_factory=list)
     averaging: RewardAveraging | None = None
     console: Console | None = None
+    motion: MotionModel | None = None  # the demonstrations' motion density (tasks observing camera velocities)
+
+    @property
+    def learned_motion(self) -> MotionModel | None:
+        """The motion density, weighed in the learned reward by irl.discriminator.motion in units of the generator's
+        reward spread over its last rollout (unweighed where the spec does not ask or the run has no PPO generator)."""
+        cb, weight = self.adversarial, self.spec.irl.discriminator.motion
+        if self.motion is None or not weight or not isinstance(cb, AdversarialCallback):
+            return self.motion
+        return self.motion.weighing(weight * cb.motion_scale())
 
     @property
     def adversarial(self) -> BaseCallback | None:
@@ -179,6 +191,18 @@ def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
     update_meta(run, generator=meta)
 
 
+def below_best(model: MotionModel, columns, obs: np.ndarray, next_obs: np.ndarray) -> np.ndarray:
+    """Each transition's motion log-density below the best of the demonstrations' (raw observations)."""
+    return model.reward(model.log_density(transition_motion(obs, next_obs, columns)), weight=1.0)
+
+
+def motion_density(spec: TaskSpec, shown: Transitions) -> MotionModel | None:
+    """The density of the demonstrated transitions' motion (fastrl.assess.motion); None where the task observes no
+    camera velocities."""
+    columns = motion_columns(spec)
+    return None if columns is None else MotionModel.fit([transition_motion(shown.obs, shown.next_obs, columns)])
+
+
 def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = True) -> Learner:
     """The model (and, learning from demonstrations, the discriminator and its callback) for a run."""
     train = spec.learning()
@@ -224,6 +248,12 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     )
     env = FastEnv(spec)
     transitions = expert_transitions(env, demos)
+    motion = motion_density(spec, transitions)
+    if d.motion and (motion is None or off_policy):
+        console.print(
+            "[dim]irl.discriminator.motion: the motion term is for PPO on a task that observes the camera's "
+            "velocities; this run goes without it[/]"
+        )
     ranked = None
     if d.ranking and disc.shaped and not off_policy:
         actor = None if irl.demonstrations.path is None else cloned_actor(spec, demos)  # D-REX: no expert
@@ -254,9 +284,11 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
             ranked=ranked,
             ranking_weight=d.ranking,
             support_spread=d.ranking_support,
+            motion=partial(below_best, motion, motion_columns(spec)) if motion and d.motion else None,
         )
     averaging = RewardAveraging(disc, d.average_every) if d.average_every and disc.shaped else None
-    learner = Learner(spec, venv, model, [cb, *([averaging] if averaging else [])], disc, demos, averaging, console)
+    callbacks = [cb, *([averaging] if averaging else [])]
+    learner = Learner(spec, venv, model, callbacks, disc, demos, averaging, console, motion)
     if spec.cloned_generator and irl.generator.anchor:
         learner.callbacks.append(CloneAnchor(*learner.pairs, steps=irl.generator.anchor, seed=spec.train.seed))
     return learner

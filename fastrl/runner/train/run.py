@@ -11,6 +11,7 @@ import numpy as np
 from rich.console import Console
 
 from ...agents.sb3 import load_checkpoint, policy_function, save_checkpoint
+from ...assess.motion import FILE as MOTION_FILE
 from ...atomic import DiskFull, is_disk_full, write_json, write_text
 from ...forked import deferred
 from ...irl.export import save_networks
@@ -277,6 +278,8 @@ def _stages(
     if spec.observation.image is None:  # the safetensors export holds MLPs: a pixel policy stays in final/
         gamma = spec.learning().params().gamma
         save_networks(run / "networks", model, venv, learner.disc, gamma, learner.snapshots, learner.demonstrated)
+        if learner.learned_motion is not None:  # beside the networks: the motion score, and the reward's motion term
+            learner.learned_motion.save(run / "networks" / MOTION_FILE)
     update_meta(
         run,
         status="evaluating",
