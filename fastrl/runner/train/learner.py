@@ -17,10 +17,10 @@ from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 from ...agents.anchor import CloneAnchor
 from ...agents.bc import action_accuracy, behaviour_clone
 from ...agents.sb3 import build_model, make_vec_env
-from ...assess.motion import MotionModel, motion_columns, transition_motion
+from ...assess.motion import MotionModel, motion_columns, step_motion, transition_motion
 from ...data.inverse import to_control_rate
 from ...data.recordings import load_recordings, with_actions
-from ...data.replay import demonstration_pairs
+from ...data.replay import demonstration_pairs, replay_arrays
 from ...data.trajectory import Trajectory
 from ...env.fast_env import FastEnv
 from ...irl import (
@@ -196,11 +196,15 @@ def below_best(model: MotionModel, columns, obs: np.ndarray, next_obs: np.ndarra
     return model.reward(model.log_density(transition_motion(obs, next_obs, columns)), weight=1.0)
 
 
-def motion_density(spec: TaskSpec, shown: Transitions) -> MotionModel | None:
-    """The density of the demonstrated transitions' motion (fastrl.assess.motion); None where the task observes no
-    camera velocities."""
+def motion_density(spec: TaskSpec, env: FastEnv, demos: list[Trajectory]) -> MotionModel | None:
+    """The density of the demonstrations' motion as scoring replays their poses (fastrl.assess.motion), their own
+    steps only; None where the task observes no camera velocities."""
     columns = motion_columns(spec)
-    return None if columns is None else MotionModel.fit([transition_motion(shown.obs, shown.next_obs, columns)])
+    if columns is None:
+        return None
+    hz = spec.episode.control_hz
+    replays = [(replay_arrays(env, t).observations, len(t.time)) for t in (to_control_rate(d, hz) for d in demos)]
+    return MotionModel.fit([step_motion(obs, columns)[:own] for obs, own in replays])
 
 
 def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = True) -> Learner:
@@ -248,7 +252,7 @@ def build_learner(spec: TaskSpec, run: Path, console: Console, progress: bool = 
     )
     env = FastEnv(spec)
     transitions = expert_transitions(env, demos)
-    motion = motion_density(spec, transitions)
+    motion = motion_density(spec, env, demos)
     if d.motion and (motion is None or off_policy):
         console.print(
             "[dim]irl.discriminator.motion: the motion term is for PPO on a task that observes the camera's "
