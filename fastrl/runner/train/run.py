@@ -278,8 +278,8 @@ def _stages(
     if spec.observation.image is None:  # the safetensors export holds MLPs: a pixel policy stays in final/
         gamma = spec.learning().params().gamma
         save_networks(run / "networks", model, venv, learner.disc, gamma, learner.snapshots, learner.demonstrated)
-        if learner.learned_motion is not None:  # beside the networks: the motion score, and the reward's motion term
-            learner.learned_motion.save(run / "networks" / MOTION_FILE)
+        if (motion := learner.learned_motion) is not None:  # beside the networks: the motion score and reward term
+            motion.save(run / "networks" / MOTION_FILE)
     update_meta(
         run,
         status="evaluating",
