@@ -104,7 +104,7 @@ class DiscriminatorSettings(Strict):
         "scored adds this weight times each step's motion log-density below the demonstrations' best (the density "
         "of their steps' speed, turn rate and its change: fastrl.assess.motion), in units of the generator's reward "
         "spread over its last rollout; the generator learns from the discriminator alone (trained with the term, "
-        "the value lost 0.20 on tremor: RESULTS, the motion in the reward); 0: none",
+        "the value lost 0.20 on tremor: RESULTS, the motion in the learned reward); 0: none",
     )
     average_every: int = Field(
         50000,
