@@ -94,10 +94,10 @@ class MotionModel:
         its log-density, so the sum reads how a trainee moves and for how long."""
         return float(self.log_density(steps).sum())
 
-    def reward(self, log_density: np.ndarray, weight: float | None = None) -> np.ndarray:
-        """The learned reward's motion term of steps of these log-densities: `weight` (else the model's own) times
-        each one's distance below the ceiling (never above zero for a recorded step)."""
-        return (self.reward_weight if weight is None else weight) * (log_density - self.ceiling)
+    def reward(self, log_density: np.ndarray) -> np.ndarray:
+        """The learned reward's motion term of steps of these log-densities: reward_weight times each one's distance
+        below the ceiling (never above zero for a recorded step)."""
+        return self.reward_weight * (log_density - self.ceiling)
 
     def save(self, path: Path) -> Path:
         """Write the model as safetensors (atomically)."""

@@ -86,8 +86,8 @@ def build_report(scored: list[TrajectoryScores], references: dict, problems: lis
         if k in keys and _inverted(references, k)
     ]
     if "motion" in keys:
-        raw = {k: [r[k + "_raw" if k in NORMALISED else k] for r in rows] for k in ("reward", "value") if k in keys}
-        warnings += unlike_motion({k: [math.nan if v is None else v for v in x] for k, x in raw.items()}, motion(rows))
+        learned = {k: raw_column(rows, k) for k in ("reward", "value") if k in keys}
+        warnings += unlike_motion(learned, raw_column(rows, "motion"))
     report = {
         "references": references,
         "warnings": warnings,
@@ -104,8 +104,7 @@ def build_report(scored: list[TrajectoryScores], references: dict, problems: lis
     labelled = [r for r in rows if isinstance(r["skill"], int | float)]
     if len({r["skill"] for r in labelled}) > 1:
         for k in keys:
-            raw = k + "_raw" if k in NORMALISED else k  # normalising by references may flip the order: rank raw
-            vals = [r[raw] if r[raw] is not None else float("nan") for r in labelled]
+            vals = raw_column(labelled, k)  # normalising by references may flip the order: rank raw
             sign = 1.0 if HIGHER_IS_BETTER[k] else -1.0  # rank so that "better" agrees with a higher label
             result = rank_correlations([sign * v for v in vals], [r["skill"] for r in labelled])
             result["level_means"] = {level: sign * m for level, m in result["level_means"].items()}
@@ -113,9 +112,10 @@ def build_report(scored: list[TrajectoryScores], references: dict, problems: lis
     return report
 
 
-def motion(rows: list[dict]) -> list[float]:
-    """Each row's motion score (NaN where it has none)."""
-    return [math.nan if r["motion"] is None else r["motion"] for r in rows]
+def raw_column(rows: list[dict], key: str) -> list[float]:
+    """Each row's score before normalisation (NaN where it has none)."""
+    raw = key + "_raw" if key in NORMALISED else key
+    return [math.nan if r[raw] is None else r[raw] for r in rows]
 
 
 def _inverted(references: dict, key: str) -> bool:

@@ -193,7 +193,7 @@ def log_generator(spec: TaskSpec, run: Path, console: Console) -> None:
 
 def below_best(model: MotionModel, columns, obs: np.ndarray, next_obs: np.ndarray) -> np.ndarray:
     """Each transition's motion log-density below the best of the demonstrations' (raw observations)."""
-    return model.reward(model.log_density(transition_motion(obs, next_obs, columns)), weight=1.0)
+    return model.log_density(transition_motion(obs, next_obs, columns)) - model.ceiling
 
 
 def motion_density(spec: TaskSpec, env: FastEnv, demos: list[Trajectory]) -> MotionModel | None:

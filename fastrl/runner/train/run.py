@@ -11,10 +11,8 @@ import numpy as np
 from rich.console import Console
 
 from ...agents.sb3 import load_checkpoint, policy_function, save_checkpoint
-from ...assess.motion import FILE as MOTION_FILE
 from ...atomic import DiskFull, is_disk_full, write_json, write_text
 from ...forked import deferred
-from ...irl.export import save_networks
 from ...log import RunRecorder
 from ...log.recording import recording_problem, repair_recording
 from ...model.compiler import CompiledTask, compile_task
@@ -36,6 +34,7 @@ from .beside import Beside
 from .evaluation import evaluate_run, expert_beside
 from .learner import build_learner
 from .monitoring import training_monitor
+from .networks import export_networks
 from .warm import warm_start_run
 
 __all__ = ["EvaluationInterrupted", "RunInterrupted", "RunOutOfSpace", "learn_into", "resume_run", "start_run"]
@@ -276,10 +275,7 @@ def _stages(
     save_checkpoint(run / "checkpoints" / f"{model.num_timesteps:010d}", model, venv, state, learner.parts)
     save_checkpoint(run / "final", model, venv, state, learner.parts)
     if spec.observation.image is None:  # the safetensors export holds MLPs: a pixel policy stays in final/
-        gamma = spec.learning().params().gamma
-        save_networks(run / "networks", model, venv, learner.disc, gamma, learner.snapshots, learner.demonstrated)
-        if (motion := learner.learned_motion) is not None:  # beside the networks: the motion score and reward term
-            motion.save(run / "networks" / MOTION_FILE)
+        export_networks(run / "networks", learner)
     update_meta(
         run,
         status="evaluating",
