@@ -52,6 +52,7 @@ class MotionModel:
     spread: np.ndarray  # (4,)
     ceiling: float = 0.0  # the highest log-density of any of the recordings' steps
     reward_weight: float = 0.0  # what a step's log-density below the ceiling adds to the learned reward, per nat
+    value_weight: float = 0.0  # the same in the units of the learned value (the generator's reward scaling)
 
     @classmethod
     def fit(cls, steps: list[np.ndarray]) -> MotionModel:
@@ -63,9 +64,10 @@ class MotionModel:
         model = cls(reference=(logged - mean) / spread, floor=floor, mean=mean, spread=spread)
         return replace(model, ceiling=float(model.log_density(ref).max()))
 
-    def weighing(self, reward_weight: float) -> MotionModel:
-        """The same density, adding `reward_weight` times each step's log-density below the ceiling to the reward."""
-        return replace(self, reward_weight=float(reward_weight))
+    def weighing(self, reward_weight: float, value_weight: float) -> MotionModel:
+        """The same density, adding `reward_weight` times each step's log-density below the ceiling to the reward,
+        and `value_weight` times its discounted sum from each state on to the value."""
+        return replace(self, reward_weight=float(reward_weight), value_weight=float(value_weight))
 
     @cached_property
     def _kernels(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
@@ -98,6 +100,16 @@ class MotionModel:
         """The learned reward's motion term of steps of these log-densities: reward_weight times each one's distance
         below the ceiling (never above zero for a recorded step)."""
         return self.reward_weight * (log_density - self.ceiling)
+
+    def value(self, log_density: np.ndarray, gamma: float) -> np.ndarray:
+        """The learned value's motion term of each state of a trajectory whose transitions have these log-densities:
+        value_weight times the discounted sum of the steps' distances below the ceiling from that state to the end,
+        as the trajectory moved on (0 at its last state). The generator's critic prices where a trainee is; how they
+        move from there is their own."""
+        from scipy.signal import lfilter
+
+        below = self.value_weight * (np.asarray(log_density, dtype=float) - self.ceiling)
+        return np.append(lfilter([1.0], [1.0, -gamma], below[::-1])[::-1], 0.0)
 
     def save(self, path: Path) -> Path:
         """Write the model as safetensors (atomically)."""

@@ -152,8 +152,14 @@ class Scorer:
         networks)."""
         density = None if self.motion is None else self.motion.log_density(step_motion(obs, self.motion_columns))
         if self.learned:
-            moving = None if density is None else self.motion.reward(density[1:])
-            with_learned(scored, learned_scores(self.networks, obs, subtasks_reached(scored.meta), moving))
+            terms = {}
+            if density is not None:
+                moves = density[1:]
+                terms = {
+                    "motion_rewards": self.motion.reward(moves),
+                    "motion_values": self.motion.value(moves, self.networks.gamma),
+                }
+            with_learned(scored, learned_scores(self.networks, obs, subtasks_reached(scored.meta), **terms))
         if density is not None:
             scored.scores["motion"] = float(density.sum())
 
@@ -206,21 +212,30 @@ def subtasks_reached(meta: dict) -> int:
     return max(1, min(meta["subtasks_done"] + 1, meta["subtasks_total"]))
 
 
-def learned_scores(networks, obs: np.ndarray, reached: int = 1, motion: np.ndarray | None = None) -> dict:
+def learned_scores(
+    networks,
+    obs: np.ndarray,
+    reached: int = 1,
+    *,
+    motion_rewards: np.ndarray | None = None,
+    motion_values: np.ndarray | None = None,
+) -> dict:
     """Learned return, value and mean potential of one trajectory's observations, and the value of each state
     ("values") and reward ("rewards"); each trajectory is evaluated as one batch, so its numbers never depend on
     the others. Reward and value count from their ceilings, the best the demonstrations reached, and are summed
     per subtask `reached`: a demonstrated step earns at most zero, every step below costs, a slower trainee never
     scores higher for the time alone, and one who stops early pays the cost of each subtask reached, not of the
-    task (RESULTS: validity). Networks saved without a value ceiling keep the mean value. `motion`: the reward's
-    motion term of each transition (MotionModel.reward), added to the reward."""
+    task (RESULTS: validity). Networks saved without a value ceiling keep the mean value. The motion terms of each
+    transition (MotionModel.reward) and state (MotionModel.value) are added to the reward and the value."""
     rewards = networks.reward(obs).astype(float) - networks.reward_ceiling
-    if motion is not None:
-        rewards = rewards + motion
+    if motion_rewards is not None:
+        rewards = rewards + motion_rewards
     values = networks.value(obs).astype(float)
     ceiling = networks.value_ceiling
     if ceiling is not None:
         values = values - ceiling
+    if motion_values is not None:
+        values = values + motion_values
     return {
         "reward": float(rewards.sum()) / reached,
         "value": float(values.mean() if ceiling is None else values.sum() / reached),

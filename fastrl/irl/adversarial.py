@@ -119,6 +119,11 @@ class AdversarialCallback(BaseCallback):
         obs, nxt, learned = self.last_rollout
         return float(learned.std() / max(float(self.motion(obs, nxt).std()), 1e-9))
 
+    def value_units(self) -> float:
+        """What a unit of learned reward is in the rewards the generator's critic learned from: 1 over the return
+        scaling's last divisor (1 unscaled)."""
+        return 1.0 if self.scale is None else float(1.0 / np.sqrt(self.scale.stats.var + self.scale.epsilon))
+
     def _on_rollout_end(self) -> None:
         buf = self.model.rollout_buffer
         n, e = buf.buffer_size, buf.n_envs

@@ -51,12 +51,25 @@ def test_no_recorded_step_lies_above_the_ceiling_and_the_reward_term_counts_down
     density = model.log_density(np.concatenate(recorded))
     assert density.max() == pytest.approx(model.ceiling)
     assert not model.reward(density).any()  # unweighed: no reward term
-    weighed = model.weighing(2.0)
+    weighed = model.weighing(2.0, 0.5)
     assert np.allclose(weighed.reward(density), 2.0 * (density - model.ceiling)) and weighed.reward(density).max() == 0
     shaking = weighed.reward(weighed.log_density(moves(10, shake=1.0)))
     assert shaking.mean() < weighed.reward(weighed.log_density(moves(10))).mean() - 1.0
     back = MotionModel.load(weighed.save(tmp_path / FILE))
-    assert (back.ceiling, back.reward_weight) == (model.ceiling, 2.0)
+    assert (back.ceiling, back.reward_weight, back.value_weight) == (model.ceiling, 2.0, 0.5)
+
+
+def test_the_value_term_is_the_discounted_motion_still_to_come_from_each_state():
+    model = MotionModel.fit([moves(seed) for seed in range(3)]).weighing(2.0, 0.5)
+    density = model.log_density(moves(10, shake=1.0))
+    value = model.value(density, 0.9)
+    below = 0.5 * (density - model.ceiling)
+    by_hand = [sum(0.9**k * b for k, b in enumerate(below[t:])) for t in range(len(below))]
+    assert len(value) == len(density) + 1 and value[-1] == 0.0  # one per state; nothing to come after the last
+    assert np.allclose(value[:-1], by_hand)
+    steady = model.value(model.log_density(moves(10)), 0.9)
+    assert value[0] < steady[0] < 0.0  # a shaking hand has more cost ahead than a steady one
+    assert not MotionModel.fit([moves(0)]).value(density, 0.9).any()  # unweighed: no value term
 
 
 def test_a_model_written_before_the_reward_term_reads_back_without_one(tmp_path):
@@ -65,7 +78,9 @@ def test_a_model_written_before_the_reward_term_reads_back_without_one(tmp_path)
     model = MotionModel.fit([moves(0)])
     save_file({k: getattr(model, k) for k in ("reference", "floor", "mean", "spread")}, tmp_path / FILE)
     old = MotionModel.load(tmp_path / FILE)
-    assert old.reward_weight == 0.0 and old.log_likelihood(moves(1)) == model.log_likelihood(moves(1))
+    assert old.reward_weight == old.value_weight == 0.0 and old.log_likelihood(moves(1)) == model.log_likelihood(
+        moves(1)
+    )
 
 
 def test_a_shaking_sluggish_or_slower_hand_is_less_likely_than_the_recordings():
@@ -152,8 +167,9 @@ def test_the_report_warns_of_a_learned_score_that_ranks_unlike_the_motion():
 
 
 @pytest.mark.slow  # trains end to end, twice
-def test_the_motion_term_weighs_in_the_learned_reward_and_leaves_the_generator_as_it_was(tmp_path):
+def test_the_motion_term_weighs_in_the_learned_reward_and_value_and_leaves_the_generator_as_it_was(tmp_path):
     from fastrl.assess.scoring import Scorer, subtasks_reached
+    from fastrl.irl.networks import load_networks
 
     spec = load_spec(NO_EXPERT)
     cohort = tmp_path / "cohort"
@@ -174,11 +190,18 @@ def test_the_motion_term_weighs_in_the_learned_reward_and_leaves_the_generator_a
     plain, _ = assess("plain")
     model = MotionModel.load(learned / "networks" / FILE)
     assert model.reward_weight > 0
+    assert 0 < model.value_weight < model.reward_weight  # AIRL's generator learns from its reward scaled down
+    gamma = load_networks(learned / "networks").gamma
     scorer = Scorer(spec)
     for path in sorted(cohort.glob("*.npz")):
         scored, obs = scorer.replayed(scorer.load_file(path))
-        term = model.reward(model.log_density(step_motion(obs, motion_columns(spec)))[1:]).sum()
+        moves_there, reached = (
+            model.log_density(step_motion(obs, motion_columns(spec)))[1:],
+            subtasks_reached(scored.meta),
+        )
+        term, ahead = model.reward(moves_there).sum(), model.value(moves_there, gamma).sum()
         row, before = weighed[path.stem], plain[path.stem]
-        assert term < 0
-        assert row["reward_raw"] == pytest.approx(before["reward_raw"] + term / subtasks_reached(scored.meta))
-        assert (row["value_raw"], row["motion"]) == (before["value_raw"], before["motion"])  # the same generator
+        assert term < 0 and ahead < 0
+        assert row["reward_raw"] == pytest.approx(before["reward_raw"] + term / reached)
+        assert row["value_raw"] == pytest.approx(before["value_raw"] + ahead / reached)  # the same generator's critic
+        assert row["motion"] == before["motion"]

@@ -59,11 +59,13 @@ class Learner:
     @property
     def learned_motion(self) -> MotionModel | None:
         """The motion density, weighed in the learned reward by irl.discriminator.motion in units of the generator's
-        reward spread over its last rollout (unweighed where the spec does not ask or the run has no PPO generator)."""
+        reward spread over its last rollout, and in the learned value in the units its critic learned (unweighed where
+        the spec does not ask or the run has no PPO generator)."""
         cb, weight = self.adversarial, self.spec.irl.discriminator.motion
         if self.motion is None or not weight or not isinstance(cb, AdversarialCallback):
             return self.motion
-        return self.motion.weighing(weight * cb.motion_scale())
+        reward_weight = weight * cb.motion_scale()
+        return self.motion.weighing(reward_weight, reward_weight * cb.value_units())
 
     @property
     def adversarial(self) -> BaseCallback | None:
