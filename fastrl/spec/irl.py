@@ -103,8 +103,9 @@ class DiscriminatorSettings(Strict):
         description="on a task that observes the camera's velocities, with a PPO generator: the learned reward "
         "scored adds this weight times each step's motion log-density below the demonstrations' best (the density "
         "of their steps' speed, turn rate and its change: fastrl.assess.motion), in units of the generator's reward "
-        "spread over its last rollout; the generator learns from the discriminator alone (trained with the term, "
-        "the value lost 0.20 on tremor: RESULTS, the motion in the learned reward); 0: none",
+        "spread over its last rollout, and the learned value scored adds the same term discounted over the "
+        "trainee's own steps from each state on; the generator learns from the discriminator alone (trained with the "
+        "term, the value lost 0.20 on tremor: RESULTS, the motion in the learned reward and value); 0: none",
     )
     average_every: int = Field(
         50000,
