@@ -78,9 +78,8 @@ def test_a_model_written_before_the_reward_term_reads_back_without_one(tmp_path)
     model = MotionModel.fit([moves(0)])
     save_file({k: getattr(model, k) for k in ("reference", "floor", "mean", "spread")}, tmp_path / FILE)
     old = MotionModel.load(tmp_path / FILE)
-    assert old.reward_weight == old.value_weight == 0.0 and old.log_likelihood(moves(1)) == model.log_likelihood(
-        moves(1)
-    )
+    assert old.reward_weight == old.value_weight == 0.0
+    assert old.log_likelihood(moves(1)) == model.log_likelihood(moves(1))
 
 
 def test_a_shaking_sluggish_or_slower_hand_is_less_likely_than_the_recordings():
@@ -195,10 +194,8 @@ def test_the_motion_term_weighs_in_the_learned_reward_and_value_and_leaves_the_g
     scorer = Scorer(spec)
     for path in sorted(cohort.glob("*.npz")):
         scored, obs = scorer.replayed(scorer.load_file(path))
-        moves_there, reached = (
-            model.log_density(step_motion(obs, motion_columns(spec)))[1:],
-            subtasks_reached(scored.meta),
-        )
+        moves_there = model.log_density(step_motion(obs, motion_columns(spec)))[1:]
+        reached = subtasks_reached(scored.meta)
         term, ahead = model.reward(moves_there).sum(), model.value(moves_there, gamma).sum()
         row, before = weighed[path.stem], plain[path.stem]
         assert term < 0 and ahead < 0
