@@ -105,7 +105,8 @@ class DiscriminatorSettings(Strict):
         "of their steps' speed, turn rate and its change: fastrl.assess.motion), in units of the generator's reward "
         "spread over its last rollout, and the learned value scored adds the same term discounted over the "
         "trainee's own steps from each state on; the generator learns from the discriminator alone (trained with the "
-        "term, the value lost 0.20 on tremor: RESULTS, the motion in the learned reward and value); 0: none",
+        "term, the value lost 0.20 on tremor: RESULTS, the motion in the learned reward; the value's term: RESULTS, "
+        "the motion in the learned value); 0: none",
     )
     average_every: int = Field(
         50000,
