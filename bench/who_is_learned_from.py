@@ -4,8 +4,9 @@
     python bench/who_is_learned_from.py --root runs/bench-validity --json docs/who_is_learned_from.json
 
 The protocol learns from the best K recordings of a cohort by a rule that sees no labels (`--by`). Each family's
-5 x 10 cohort of bench/validity.py (written there once, reused here) is scored by replay once; for each rule the
-mean skill level of its best K and how many of them are at the top level are printed (5.0 and K: only experts).
+5 x 10 cohort of bench/validity.py (written there once, reused here) is scored by replay once (twice for `motion`);
+for each rule the mean skill level of its best K and how many of them are at the top level are printed (5.0 and K:
+only experts).
 A rule that lets novices in teaches the learned reward their deficit as expert behaviour.
 """
 
@@ -29,11 +30,15 @@ def chosen_levels(task: str, family: str, root: Path, top: int) -> dict[str, lis
     from fastrl.runner.chosen import BY, rank_key, rank_recordings
     from fastrl.spec import load_spec
 
-    ranked, _ = rank_recordings(load_spec(f"specs/{task}.yaml"), [cohort(task, family, root)], "time")
+    spec = load_spec(f"specs/{task}.yaml")
+    ranked, _ = rank_recordings(spec, [cohort(task, family, root)], "time")
     scores = [s for s, _ in ranked]
     levels = {}
     for by in BY:
-        best = sorted(scores, key=lambda s: rank_key(s, by))[:top]
+        if by == "motion":  # ranks need the whole cohort's motion under its best `top`'s
+            best = [s for s, _ in rank_recordings(spec, [cohort(task, family, root)], by, top)[0][:top]]
+        else:
+            best = sorted(scores, key=lambda s: rank_key(s, by))[:top]
         levels[by] = [int(s.skill) for s in best]
     return levels
 

@@ -22,7 +22,10 @@ def assess_cohort(
     ] = None,
     top: Annotated[int, typer.Option("--top", metavar="K", help="learn from the K best recordings")] = 10,
     by: Annotated[
-        str | None, typer.Option(help="rank by time (the stopwatch; the default), length (path) or heuristic")
+        str | None,
+        typer.Option(
+            help="rank by motion (the stopwatch and the motion; the default), time, length (path) or heuristic"
+        ),
     ] = None,
     algorithm: Annotated[str, typer.Option(help="airl or gail")] = "airl",
     seeds: Annotated[

@@ -113,6 +113,28 @@ def test_no_motion_score_without_camera_velocities_or_beside_instruments():
     assert len(speed) == 3 and len(turn) == 4
 
 
+def test_ranked_by_the_motion_a_shaking_copy_as_fast_as_its_recording_gives_way_to_a_steady_hand(tmp_path):
+    from fastrl.runner.chosen import rank_recordings
+
+    spec = load_spec(NO_EXPERT)
+    env = FastEnv(spec)
+    for traj in make_cohort(spec, 3, 3, seed=0):
+        Trajectory(traj.time, traj.portal, traj.meta).save(tmp_path / f"{traj.meta['subject']}.npz")
+        if traj.meta["skill"] == 3:  # each expert's shaking copy takes as long, and comes first by name
+            shaking = with_overlays(env, traj, {"jitter": 1.0}, 0)
+            Trajectory(shaking.time, shaking.portal, shaking.meta).save(tmp_path / f"A-{traj.meta['subject']}.npz")
+    by_time, _ = rank_recordings(spec, [tmp_path], "time", 3)
+    by_motion, _ = rank_recordings(spec, [tmp_path], "motion", 3)
+    assert [s.name for s, _ in by_time[:3]] == ["A-L3-S03", "L3-S03", "A-L3-S02"]  # two shaking hands of three
+    assert [s.name for s, _ in by_motion[:3]] == ["L3-S03", "A-L3-S03", "L3-S02"]
+    assert sorted(s.name for s, _ in by_motion) == sorted(s.name for s, _ in by_time)
+    assert by_motion[2][0].scores["motion"] > by_motion[3][0].scores["motion"] + 10  # the steady hand, likelier
+    assert [t is not None for _, t in by_motion].count(True) == 3  # the best 3 keep theirs, one read again
+    np.testing.assert_array_equal(by_motion[2][1].portal, Trajectory.load(tmp_path / "L3-S02.npz").portal)
+    with pytest.raises(ValueError, match="needs the K"):
+        rank_recordings(spec, [tmp_path], "motion")
+
+
 def chosen(runs: Path) -> list[dict]:
     """The recordings the assessment under `runs` learned from."""
     return json.loads(next(runs.glob("medial_pair/*-assess-airl-s0/protocol.json")).read_text())["chosen"]

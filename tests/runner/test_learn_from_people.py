@@ -155,7 +155,8 @@ def test_assess_runs_the_protocol_on_a_task_without_a_scripted_expert(tmp_path, 
         + ["--no-progress", "--set", "irl.generator.recorded_starts=0.5"],
     )
     assert res.exit_code == 0, res.output
-    assert "learned from the 3 best of 11 recordings by subtasks completed (more first), then duration" in res.output
+    rule = "by subtasks completed (more first), then the sum of the ranks by duration and by the motion's likelihood"
+    assert f"learned from the 3 best of 11 recordings {rule}" in res.output
     skipped = [line for line in res.output.splitlines() if line.startswith("skipped")]
     assert len(skipped) == 2 and any("broken.npz" in s for s in skipped) and any("other_task" in s for s in skipped)
     report = json.loads(out.read_text())
@@ -188,7 +189,7 @@ def test_assess_reports_bad_options_and_empty_cohorts_in_one_line(tmp_path):
     empty.mkdir()
     (empty / "broken.npz").write_bytes(b"nothing")
     for extra, message in (
-        (["--by", "speed"], "--by must be one of time, length, heuristic"),
+        (["--by", "speed"], "--by must be one of motion, time, length, heuristic"),
         (["--algorithm", "bc"], "--algorithm must be one of airl, gail"),
         (["--top", "0"], "--top must be at least 1"),
         ([], "nothing to learn from; 1 skipped, the first: " + str(empty / "broken.npz")),
