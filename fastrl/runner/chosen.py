@@ -101,9 +101,10 @@ def by_motion(spec, ranked: list, paths: dict[int, Path], top: int) -> list:
         """Its replay's steps (held still to the time limit where it stops early, as scoring replays it)."""
         return step_motion(scorer.replayed(traj)[1], scorer.motion_columns)
 
-    model = MotionModel.fit([steps(traj)[: len(traj.time)] for _, traj in ranked[:top]])
-    for pair in ranked:
-        pair[0].scores["motion"] = model.log_likelihood(steps(read(pair)))
+    reference = [steps(traj) for _, traj in ranked[:top]]  # replayed once: fitted to, then scored
+    model = MotionModel.fit([moves[: len(traj.time)] for moves, (_, traj) in zip(reference, ranked)])
+    for k, pair in enumerate(ranked):
+        pair[0].scores["motion"] = model.log_likelihood(reference[k] if k < top else steps(read(pair)))
     scores = [s for s, _ in ranked]
     both = rankdata([s.scores["time"] for s in scores]) + rankdata([-s.scores["motion"] for s in scores])
     order = sorted(range(len(ranked)), key=lambda i: (-scores[i].scores["subtasks"], both[i], scores[i].name))
