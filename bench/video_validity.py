@@ -3,15 +3,16 @@
     python bench/video_validity.py                                   # TraceLines, classic family, seed 0
     python bench/video_validity.py --task periscoping --skip-reencode
     python bench/video_validity.py --families mixed
+    python bench/video_validity.py --by motion --skip-reencode         # learn from the best 10 by the motion too
 
-For each family: the 5 x 10 cohort of bench/validity.py (no actions) is rendered to H.264 mp4 at the task's
-endoscope size and control rate (`fastrl render-video`), then `fastrl assess VIDEOS --top 10 --by time` learns from
-the best 10 videos (their portal coordinates read off the frames by the task's pose estimator, trained once and
-cached) and scores all 50; the same protocol on the cohort's .npz files (the true portal coordinates) runs beside
-it. Printed: Kendall tau-b against the skill labels of the learned reward and value, the heuristic, the stopwatch,
-the path length and the subtasks, from video and from kinematics. Then the videos re-encoded at 25, 30 and 60 fps,
-at 96 and 192 px and at crf 35 are scored with the video run's networks (`fastrl score --run`), each tau-b beside
-the originals'; and 100 videos of 10 s at 30 fps are scored, timed. Writes --json.
+For each family: the 5 x 10 cohort of bench/validity.py (no actions) is rendered to H.264 mp4 at the task's endoscope
+size and control rate (`fastrl render-video`), then `fastrl assess VIDEOS --top 10 --by time` (`--by`: another rule)
+learns from the best 10 videos (their portal coordinates read off the frames by the task's pose estimator, trained
+once and cached) and scores all 50; the same protocol on the cohort's .npz files (the true portal coordinates) runs
+beside it. Printed: Kendall tau-b against the skill labels of the learned reward and value, the heuristic, the
+stopwatch, the path length and the subtasks, from video and from kinematics. Then the videos re-encoded at 25, 30 and
+60 fps, at 96 and 192 px and at crf 35 are scored with the video run's networks (`fastrl score --run`), each tau-b
+beside the originals'; and 100 videos of 10 s at 30 fps are scored, timed. Writes --json.
 """
 
 from __future__ import annotations
@@ -99,8 +100,8 @@ def taus(report: dict, labels: dict[str, int]) -> dict:
     return out
 
 
-def protocol(inputs: Path, task: str, seed: int, root: Path, seeds: int = 1):
-    """`fastrl assess INPUTS --top 10 --by time [--seeds N]`, quiet; (what it did, seconds)."""
+def protocol(inputs: Path, task: str, seed: int, root: Path, seeds: int = 1, by: str = "time"):
+    """`fastrl assess INPUTS --top 10 --by BY [--seeds N]`, quiet; (what it did, seconds)."""
     from rich.console import Console
 
     from fastrl.runner.protocol import run_protocol
@@ -110,7 +111,7 @@ def protocol(inputs: Path, task: str, seed: int, root: Path, seeds: int = 1):
         [inputs],
         Path(f"specs/{task}.yaml"),
         top=10,
-        by="time",
+        by=by,
         overrides=[f"train.seed={seed}"],
         root=root,
         console=Console(stderr=True, quiet=True),
@@ -151,6 +152,7 @@ def main() -> None:
     parser.add_argument("--families", nargs="+", default=["classic"])
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--seeds", type=int, default=1, help="learn on this many seeds and rank by their mean")
+    parser.add_argument("--by", default="time", help="whom the protocol learns from (fastrl assess --by)")
     parser.add_argument("--root", type=Path, default=ROOT)
     parser.add_argument("--skip-kinematic", action="store_true")
     parser.add_argument("--skip-reencode", action="store_true")
@@ -174,9 +176,16 @@ def main() -> None:
         mp4 = videos(folder, base / "videos")
         learned_from, done = {"video": mp4, **({} if args.skip_kinematic else {"kinematic": folder})}, {}
         for name, inputs in learned_from.items():
-            done[name], secs = protocol(inputs, args.task, args.seed, base / "runs", args.seeds)
+            done[name], secs = protocol(inputs, args.task, args.seed, base / "runs" / args.by, args.seeds, args.by)
             taus_b = taus(done[name].assessment.report, labels)
-            row = {"family": family, "input": name, "seeds": args.seeds, "tau_b": taus_b, "seconds": secs}
+            row = {
+                "family": family,
+                "input": name,
+                "by": args.by,
+                "seeds": args.seeds,
+                "tau_b": taus_b,
+                "seconds": secs,
+            }
             keep({**row, "run": str(done[name].run)})
         if args.skip_reencode:
             continue
