@@ -1,7 +1,8 @@
 """Which steps should the motion's likelihood read? The shipped camera speed and turn rate against more of the pose.
 
     python bench/motion_features.py --tasks periscoping
-    python bench/motion_features.py --tasks tracelines imagecentring --features speed camera
+    python bench/motion_features.py --tasks periscoping tracelines imagecentring --json docs/motion_features.json
+    python bench/motion_features.py --tasks tracelines --families classic jitter --kinds pumping
 
 The learned scores add the motion's log-likelihood under the density of the best K's steps (fastrl.assess.motion:
 each step's camera speed and turn rate and how much each changed). Deficits the speed and turn rate do not separate
@@ -26,10 +27,6 @@ from pathlib import Path
 
 import numpy as np
 from common import machine_line
-
-FAMILIES = "classic flow speed depth field_of_view horizon economy corrections safety slowed jitter drift".split()
-FAMILIES += ["paused", "retraced", "mixed"]
-KINDS = ("sluggish", "ringing", "pumping", "wobble", "fatigue", "spikes", "mix")
 
 
 def changed(m: np.ndarray) -> np.ndarray:
@@ -103,13 +100,13 @@ def cohort_rows(task: str, folder: Path, top: int) -> dict:
         scored, obs = scorer.replayed(traj, path.stem)
         rows.append((path.stem, int(traj.meta["skill"]), len(traj.time), scored.scores, feature_sets(obs, at, hz)))
     level, own = np.array([r[1] for r in rows]), [r[2] for r in rows]
-    first = [r[3]["subtasks"] for r in rows], [r[3]["time"] for r in rows]
-    by_time = sorted(range(len(rows)), key=lambda i: (-first[0][i], first[1][i], rows[i][0]))[:top]
+    done, took = [r[3]["subtasks"] for r in rows], [r[3]["time"] for r in rows]
+    by_time = sorted(range(len(rows)), key=lambda i: (-done[i], took[i], rows[i][0]))[:top]
     out = {}
     for name in rows[0][4]:
         steps = [r[4][name] for r in rows]
-        both = rankdata(first[1]) + rankdata(-likelihoods(steps, own, by_time))
-        best = sorted(range(len(rows)), key=lambda i: (-first[0][i], both[i], rows[i][0]))[:top]
+        both = rankdata(took) + rankdata(-likelihoods(steps, own, by_time))
+        best = sorted(range(len(rows)), key=lambda i: (-done[i], both[i], rows[i][0]))[:top]
         tau = kendalltau(likelihoods(steps, own, best), level).statistic
         out[name] = {"level": float(level[best].mean()), "motion": float(tau)}
     return out
@@ -119,10 +116,12 @@ def main() -> None:
     import outside_cohorts
     import validity
 
+    from fastrl.data.families import FAMILIES
+
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--tasks", nargs="+", default=["periscoping"], choices=outside_cohorts.SCOPE_ONLY)
-    parser.add_argument("--families", nargs="+", default=FAMILIES)
-    parser.add_argument("--kinds", nargs="+", default=list(KINDS))
+    parser.add_argument("--families", nargs="+", default=[*FAMILIES, "mixed"])
+    parser.add_argument("--kinds", nargs="+", default=[*outside_cohorts.KINDS, "mix"])
     parser.add_argument("--top", type=int, default=10)
     parser.add_argument("--root", type=Path, default=Path("runs"), help="holds bench-validity/ and bench-outside/")
     parser.add_argument("--json", type=Path, default=Path("docs/motion_features.json"))
