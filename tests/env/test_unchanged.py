@@ -12,7 +12,7 @@ from ..rollouts import REFERENCE_SPECS, expert_episodes, model_digest, reference
 
 MAIN = np.load(Path(__file__).parents[1] / "fixtures" / "main_rollouts.npz")  # recorded on main before instruments
 # On an AMD EPYC of family 25 (2026-12-07) the continuous actions' physics differ from the recording in the last bit
-# from the second step (6.9e-18 in a portal angle), grown to at most 3.7e-5 over 200 steps (ImageCentring's contacts);
+# from the second step (6.9e-18 in a portal angle), grown to at most 3.7e-5 over 200 steps (an ImageCentring reward);
 # whole expert episodes still agree exactly. A change of behaviour moves them by orders of magnitude more.
 DRIFT = 1e-4
 # Deliberate changes to a bundled spec since the references were recorded, set back for the comparison.
@@ -26,7 +26,7 @@ def test_bundled_specs_behave_as_on_main(name):
     spec = load_spec(spec_file(name), SINCE.get(name, []))
     live = references(name, spec)
     assert {k for k in MAIN.files if k.startswith(f"{name}/") and k.count("/") == 3} == set(live)
-    for key, arr in live.items():  # to the last bits on the CPUs that recorded them; not on every CPU (below)
+    for key, arr in live.items():  # to the last bit on the CPU that recorded them, within DRIFT on others
         np.testing.assert_allclose(arr, MAIN[key], rtol=0, atol=DRIFT, err_msg=key)
     np.testing.assert_array_equal(expert_episodes(name, spec), MAIN[f"{name}/episodes"])
     assert model_digest(spec) == str(MAIN[f"{name}/xml_sha256"])
