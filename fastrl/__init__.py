@@ -3,12 +3,20 @@
 from __future__ import annotations
 
 import os
+import sys
 
 if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
     os.environ.setdefault("MUJOCO_GL", "egl")  # offscreen rendering on headless machines (before mujoco loads)
 # numpy's matrix products are small here (the exported networks, evaluated in numpy by `fastrl score`): OpenBLAS's
 # threads cost more than they save, twice so beside a second process on the other core (before numpy loads)
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+if "numpy" in sys.modules and os.environ["OPENBLAS_NUM_THREADS"].isdigit():
+    # numpy loaded first (a script, pytest, a Ray worker): the variable came too late. On some CPUs (an AMD EPYC of
+    # family 25, 2026-12-07) the products' last bits also depend on the threads, so networks scored differently by
+    # process; every process that imports fastrl now has the same BLAS threads
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(int(os.environ["OPENBLAS_NUM_THREADS"]), user_api="blas")
 
 import gymnasium  # noqa: E402
 

@@ -6,7 +6,6 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import dataclass
-from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -20,34 +19,22 @@ def file_sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-@cache
-def _blas():
-    """numpy's BLAS, to be held to one thread: on some CPUs (an AMD EPYC of family 25, 2026-12-07) OpenBLAS's
-    products differ in their last bits with the number of threads splitting them, and a process's share differs
-    (a forked helper, a Ray worker), so the same networks scored the same states differently by process."""
-    from threadpoolctl import ThreadpoolController
-
-    return ThreadpoolController()
-
-
 @dataclass(frozen=True)
 class Mlp:
-    """A chain of linear layers and activations evaluated in float32 with numpy, as torch evaluates them, on one
-    BLAS thread (the same bits in any process)."""
+    """A chain of linear layers and activations evaluated in float32 with numpy, as torch evaluates them."""
 
     layers: tuple
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
-        with _blas().limit(limits=1, user_api="blas"):
-            for kind, a, b in self.layers:
-                if kind == "linear":
-                    x = x @ a if b is None else x @ a + b
-                elif kind == "tanh":
-                    x = np.tanh(x)
-                elif kind == "relu":
-                    x = np.maximum(x, np.float32(0.0))
-                else:  # hardtanh
-                    x = np.clip(x, np.float32(a), np.float32(b))
+        for kind, a, b in self.layers:
+            if kind == "linear":
+                x = x @ a if b is None else x @ a + b
+            elif kind == "tanh":
+                x = np.tanh(x)
+            elif kind == "relu":
+                x = np.maximum(x, np.float32(0.0))
+            else:  # hardtanh
+                x = np.clip(x, np.float32(a), np.float32(b))
         return x
 
 

@@ -1,6 +1,7 @@
 """Scoring trajectories: kinematic scores, ranking statistics, replay scores and `fastrl score` end to end."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -314,6 +315,14 @@ def test_a_run_scored_in_two_processes_gives_the_same_report_and_neither_process
     assert reports[0] == reports[1]  # bit for bit: each trajectory's networks evaluated alone, in either process
     assert all(r["reward_raw"] is not None and r["value_raw"] is not None for r in reports[1]["trajectories"])
     assert (two.parent / "scores_paths.png").stat().st_size > 10_000 and two.with_suffix(".rrd").exists()
+
+
+def test_fastrl_imported_after_numpy_still_holds_blas_to_one_thread():
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}  # as a fresh shell has it
+    script = "import json, numpy, fastrl, threadpoolctl; print(json.dumps(threadpoolctl.threadpool_info()))"
+    res = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=120)
+    blas = [lib["num_threads"] for lib in json.loads(res.stdout) if lib["user_api"] == "blas"]
+    assert blas and set(blas) == {1}, res.stdout + res.stderr
 
 
 def test_expert_paths_from_the_helper_process_are_the_ones_computed_here(scorer):
