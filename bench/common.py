@@ -26,8 +26,24 @@ def cpuinfo(field: str) -> str | None:
 
 
 def cpu_model() -> str:
-    """The processor's model name (from /proc/cpuinfo where there is one)."""
-    return cpuinfo("model name") or platform.processor() or platform.machine()
+    """The processor's model name, with its family and model numbers where /proc/cpuinfo has them (a virtual machine
+    may name only "AMD EPYC": two sessions' EPYCs of other generations train the same spec and seed differently)."""
+    name = cpuinfo("model name") or platform.processor() or platform.machine()
+    family, model = cpuinfo("cpu family"), cpuinfo("model")
+    return f"{name} (family {family}, model {model})" if family and model else name
+
+
+def versions() -> str:
+    """The versions of the packages whose arithmetic the figures rest on."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    found = []
+    for package in ("mujoco", "numpy", "torch"):
+        try:
+            found.append(f"{package} {version(package)}")
+        except PackageNotFoundError:
+            pass
+    return ", ".join(found)
 
 
 def load_figures() -> list[str]:
@@ -46,8 +62,9 @@ def load_after() -> str:
 
 
 def machine_line() -> str:
-    """One line naming the machine, its cores and the load now."""
-    return f"{cpu_model()}, {os.cpu_count()} cores, load average {load_average()}, Python {platform.python_version()}"
+    """One line naming the machine, its cores, the load now and the versions that set the arithmetic."""
+    python = f"Python {platform.python_version()}, {versions()}"
+    return f"{cpu_model()}, {os.cpu_count()} cores, load average {load_average()}, {python}"
 
 
 def utc_stamp() -> str:
