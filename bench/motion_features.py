@@ -3,11 +3,13 @@
     python bench/motion_features.py --tasks periscoping
     python bench/motion_features.py --tasks periscoping tracelines imagecentring --json docs/motion_features.json
     python bench/motion_features.py --tasks tracelines --families classic jitter --kinds pumping
+    python bench/motion_features.py --tasks tracelines --sets speed speed+view     # where the camera points too
 
 The learned scores add the motion's log-likelihood under the density of the best K's steps (fastrl.assess.motion:
 each step's camera speed and turn rate and how much each changed). Deficits the speed and turn rate do not separate
 (pumping in and out along the shaft, a rolling horizon) might read better from the motion split along the scope's
-axes. No training: each cohort (bench/validity.py's families, bench/outside_cohorts.py's kinds) is replayed once,
+axes; deficits of where the camera points (depth, horizon, field of view) from a density of the view beside the
+motion's. No training: each cohort (bench/validity.py's families, bench/outside_cohorts.py's kinds) is replayed once,
 and for each set of step features the protocol's `--by motion` rule is run with that set (best 10 by the stopwatch,
 the density of their steps, the best 10 by the sum of the ranks by duration and by likelihood, the density of
 theirs); printed: the mean level of that best 10 and the Kendall tau-b of every recording's likelihood under their
@@ -56,18 +58,31 @@ def portal_rates(obs: np.ndarray, at: dict, hz: float) -> np.ndarray:
     return np.column_stack([np.linalg.norm(d[:, :2], axis=1), np.abs(d[:, 2]), np.abs(d[:, 3]), np.abs(d[:, 4])])
 
 
-def feature_sets(obs: np.ndarray, at: dict, hz: float) -> dict[str, list[np.ndarray]]:
-    """Each set's step features, as the groups whose densities multiply (one group: one joint density)."""
+def view(obs: np.ndarray, at: dict) -> np.ndarray:
+    """Where each step's camera points: its distance to the avatar, the avatar's angle off the view's centre and the
+    horizon's tilt against the avatar's up (rad): (n, 3)."""
+    distance = np.linalg.norm(obs[:, at["target_pos"]] - obs[:, at["tip_pos"]], axis=1)
+    x, y, z = obs[:, at["target_in_camera"]].T
+    sine, cosine = obs[:, at["horizon_error"]].T
+    return np.column_stack([distance, np.arctan2(np.hypot(x, y), z), np.abs(np.arctan2(sine, cosine))])
+
+
+def speed_steps(obs: np.ndarray, at: dict) -> np.ndarray:
+    """The shipped step features: the camera's speed and turn rate, each with its change since the step before."""
     from fastrl.assess.motion import step_motion
 
-    speed = step_motion(obs, (at["tip_vel"], at["tip_quat_rate"]))
-    axes = camera_axes(obs, at)
-    return {
-        "speed": [speed],  # shipped
-        "camera": [changed(axes)],
-        "portal": [changed(portal_rates(obs, at, hz))],
-        "speed+shaft": [speed, changed(axes[:, [0, 2]])],  # the shipped density times one of along-axis motion
-    }
+    return step_motion(obs, (at["tip_vel"], at["tip_quat_rate"]))
+
+
+SETS = {  # each set's step features, as the groups whose densities multiply (one group: one joint density)
+    "speed": lambda o, at, hz: [speed_steps(o, at)],  # shipped
+    "camera": lambda o, at, hz: [changed(camera_axes(o, at))],
+    "portal": lambda o, at, hz: [changed(portal_rates(o, at, hz))],
+    "speed+shaft": lambda o, at, hz: [speed_steps(o, at), changed(camera_axes(o, at)[:, [0, 2]])],
+    "view": lambda o, at, hz: [view(o, at)],
+    "speed+view": lambda o, at, hz: [speed_steps(o, at), view(o, at)],
+    "speed+distance": lambda o, at, hz: [speed_steps(o, at), view(o, at)[:, :1]],
+}
 
 
 def likelihoods(steps: list[list[np.ndarray]], own: list[int], fitted: list[int]) -> np.ndarray:
@@ -81,7 +96,7 @@ def likelihoods(steps: list[list[np.ndarray]], own: list[int], fitted: list[int]
     return total
 
 
-def cohort_rows(task: str, folder: Path, top: int) -> dict:
+def cohort_rows(task: str, folder: Path, top: int, sets: list[str]) -> dict:
     """The `--by motion` rule's best `top` and the motion's tau-b under each feature set, for one cohort."""
     from scipy.stats import kendalltau, rankdata
 
@@ -98,7 +113,8 @@ def cohort_rows(task: str, folder: Path, top: int) -> dict:
     for path in sorted(folder.glob("*.npz")):
         traj = to_control_rate(Trajectory.load(path), hz)
         scored, obs = scorer.replayed(traj, path.stem)
-        rows.append((path.stem, int(traj.meta["skill"]), len(traj.time), scored.scores, feature_sets(obs, at, hz)))
+        features = {name: SETS[name](obs, at, hz) for name in sets}
+        rows.append((path.stem, int(traj.meta["skill"]), len(traj.time), scored.scores, features))
     level, own = np.array([r[1] for r in rows]), [r[2] for r in rows]
     done, took = [r[3]["subtasks"] for r in rows], [r[3]["time"] for r in rows]
     by_time = sorted(range(len(rows)), key=lambda i: (-done[i], took[i], rows[i][0]))[:top]
@@ -122,6 +138,7 @@ def main() -> None:
     parser.add_argument("--tasks", nargs="+", default=["periscoping"], choices=outside_cohorts.SCOPE_ONLY)
     parser.add_argument("--families", nargs="+", default=[*FAMILIES, "mixed"])
     parser.add_argument("--kinds", nargs="+", default=[*outside_cohorts.KINDS, "mix"])
+    parser.add_argument("--sets", nargs="+", default=list(SETS), choices=list(SETS), help="the feature sets compared")
     parser.add_argument("--top", type=int, default=10)
     parser.add_argument("--root", type=Path, default=Path("runs"), help="holds bench-validity/ and bench-outside/")
     parser.add_argument("--json", type=Path, default=Path("docs/motion_features.json"))
@@ -134,7 +151,9 @@ def main() -> None:
         made = [("family", f, validity.cohort(task, f, args.root / "bench-validity")) for f in args.families]
         made += [("outside", k, outside_cohorts.cohort(task, k, args.root / "bench-outside")) for k in args.kinds]
         for group, name, folder in made:
-            rows.append({"task": task, "group": group, "cohort": name, "sets": cohort_rows(task, folder, args.top)})
+            rows.append(
+                {"task": task, "group": group, "cohort": name, "sets": cohort_rows(task, folder, args.top, args.sets)}
+            )
             cells = "  ".join(f"{s} {v['level']:.1f} {v['motion']:+.2f}" for s, v in rows[-1]["sets"].items())
             print(f"{task:13s} {name:14s} {cells}", flush=True)
             args.json.parent.mkdir(parents=True, exist_ok=True)
