@@ -27,7 +27,7 @@ def cpuinfo(field: str) -> str | None:
 
 def cpu_model() -> str:
     """The processor's model name, with its family and model numbers where /proc/cpuinfo has them (a virtual machine
-    may name only "AMD EPYC": two sessions' EPYCs of other generations train the same spec and seed differently)."""
+    may name only "AMD EPYC", and two sessions' VMs of that name trained the same spec and seed differently)."""
     name = cpuinfo("model name") or platform.processor() or platform.machine()
     family, model = cpuinfo("cpu family"), cpuinfo("model")
     return f"{name} (family {family}, model {model})" if family and model else name
