@@ -63,8 +63,8 @@ def load_after() -> str:
 
 def machine_line() -> str:
     """One line naming the machine, its cores, the load now and the versions that set the arithmetic."""
-    python = f"Python {platform.python_version()}, {versions()}"
-    return f"{cpu_model()}, {os.cpu_count()} cores, load average {load_average()}, {python}"
+    cores = f"{os.cpu_count()} cores, load average {load_average()}"
+    return f"{cpu_model()}, {cores}, Python {platform.python_version()}, {versions()}"
 
 
 def utc_stamp() -> str:

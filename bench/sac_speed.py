@@ -20,7 +20,6 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import argparse
 import time
 
-import torch
 from common import machine_line
 
 SCHEDULES = {
@@ -92,7 +91,7 @@ def main() -> None:
             cache["t"] = expert_transitions(FastEnv(spec), expert_trajectories(FastEnv(spec), range(20)))
         return cache["t"]
 
-    print(f"# {machine_line()}, torch {torch.__version__} (models on 1 thread)")
+    print(f"# {machine_line()} (models on 1 thread)")
     print("| schedule | envs | steps/update | batch | net | lean | steps/s | ms per update | vs plain SB3 SAC |")
     print("|---|---|---|---|---|---|---|---|---|")
     ref = None
